@@ -1,0 +1,232 @@
+// candela-cli: batch rendering, equal-time benchmarking and volume generation.
+//   candela-cli render SCENE.json -o OUT.exr|OUT.png [--spp N | --time S] [--seed N] [--threads N]
+//                      [--strategy PRESET] [--set key=value ...]
+//   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
+//   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
+#include "convergence.h"
+#include "procedural.h"
+#include "renderer.h"
+#include "scene.h"
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+using namespace candela;
+
+namespace {
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// The scene document with a strategy preset (if any) and the --set edits applied, validated.
+SceneDesc sceneWith(const std::string& path, const std::string& preset, const std::vector<std::string>& sets) {
+  Json doc = readSceneJson(path);
+  if (!preset.empty()) doc["strategy"] = Json{{"preset", preset}};
+  for (const auto& s : sets) applySetting(doc, s, path + " (--set " + s + ")");
+  return parseSceneDesc(doc, path);
+}
+
+std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
+  std::vector<std::string> warnings;
+  auto scene = Scene::build(desc, &warnings);
+  for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
+  return scene;
+}
+
+int render(const std::string& scenePath, const std::string& out, int spp, double seconds, int seed, int threads,
+           const std::string& preset, const std::vector<std::string>& sets) {
+  std::vector<std::string> all = sets;
+  if (seed >= 0) all.insert(all.begin(), "render.seed=" + std::to_string(seed));
+  SceneDesc desc = sceneWith(scenePath, preset, all);
+  if (spp > 0) desc.render.spp = spp;
+  if (seconds > 0.0) desc.render.time_s = static_cast<float>(seconds);
+  else if (spp > 0) desc.render.time_s = 0.0f;
+  const auto loadStart = std::chrono::steady_clock::now();
+  auto scene = buildScene(desc);
+  const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
+  ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
+  Film film;
+  const double t = renderer.renderBudget(film, desc.render.spp, desc.render.time_s, desc.render.time_s > 0 ? 1 : 4);
+  Image image;
+  image.width = film.width();
+  image.height = film.height();
+  image.rgb = film.meanImage();
+  image.metadata["scene"] = scenePath;
+  image.metadata["settings"] = sceneToJson(desc).dump();
+  image.metadata["spp"] = std::to_string(film.spp());
+  image.metadata["seconds"] = std::to_string(t);
+  image.metadata["rejected_samples"] = std::to_string(film.rejectedSamples());
+  writeImage(out, image);
+  const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
+  std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples\n",
+              scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
+              paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()));
+  std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
+  return 0;
+}
+
+int bench(const std::string& scenePath, const std::string& strategiesText, const std::string& timesText, const std::string& refPath,
+          int refSpp, const std::string& refStrategy, const std::string& outDir, int threads, const std::vector<std::string>& sets) {
+  const auto strategies = splitList(strategiesText);
+  std::vector<double> times;
+  for (const auto& t : splitList(timesText)) {
+    try {
+      times.push_back(std::stod(t));
+    } catch (...) {
+      throw InputError("--times: expected comma-separated seconds, got \"" + timesText + "\"");
+    }
+    if (!(times.back() > 0.0)) throw InputError("--times: expected positive seconds, got " + t);
+  }
+  if (strategies.empty()) throw InputError("--strategies: expected at least one preset");
+  if (times.empty()) throw InputError("--times: expected at least one time budget");
+  std::sort(times.begin(), times.end());
+  for (const auto& s : strategies) strategyPreset(s, "--strategies");
+  std::filesystem::create_directories(outDir);
+
+  Image reference;
+  std::string referenceNote;
+  if (!refPath.empty()) {
+    reference = readExr(refPath);
+    referenceNote = "reference: " + refPath;
+  } else {
+    SceneDesc refDesc = sceneWith(scenePath, refStrategy, sets);
+    std::string cachePath;
+    std::printf("reference: %s at %d spp (cached by scene hash)...\n", refStrategy.c_str(), refSpp);
+    std::fflush(stdout);
+    const auto t0 = std::chrono::steady_clock::now();
+    reference = cachedReference(refDesc, refDesc.strategy, refSpp, threads, &cachePath);
+    std::printf("reference ready in %.1f s: %s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                cachePath.c_str());
+    referenceNote = "reference: " + refStrategy + " at " + std::to_string(refSpp) + " spp, " + cachePath;
+  }
+
+  std::vector<ConvergencePoint> points;
+  for (const auto& strategy : strategies) {
+    SceneDesc desc = sceneWith(scenePath, strategy, sets);
+    auto scene = buildScene(desc);
+    if (reference.width != scene->camera().width() || reference.height != scene->camera().height())
+      throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
+                       ", expected the scene's " + std::to_string(scene->camera().width()) + "x" + std::to_string(scene->camera().height()));
+    for (double budget : times) {
+      ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
+      Film film;
+      ConvergencePoint p;
+      p.strategy = strategy;
+      p.budgetSeconds = budget;
+      p.seconds = renderer.renderBudget(film, 0, budget, 1);
+      p.spp = film.spp();
+      p.rejected = film.rejectedSamples();
+      const ErrorMetrics e = film.spp() > 0 ? imageError(film.meanImage(), reference.rgb) : ErrorMetrics{NAN, NAN};
+      p.mse = e.mse;
+      p.relmse = e.relmse;
+      points.push_back(p);
+      std::printf("%-14s budget %7.2f s  time %7.2f s  spp %6d  mse %.4g  relmse %.4g\n", strategy.c_str(), budget, p.seconds, p.spp,
+                  p.mse, p.relmse);
+      std::fflush(stdout);
+    }
+  }
+  const std::string csv = (std::filesystem::path(outDir) / "convergence.csv").string();
+  const std::string svg = (std::filesystem::path(outDir) / "convergence.svg").string();
+  std::ostringstream comment;
+  comment << "scene: " << scenePath << "; threads: " << (threads > 0 ? std::to_string(threads) : "all") << "; " << referenceNote;
+  writeConvergenceCsv(csv, points, comment.str());
+  writeConvergenceSvg(svg, points, std::filesystem::path(scenePath).stem().string() + ": error versus time");
+  std::printf("\nefficiency = 1 / (relMSE x time) at the largest budget (%.2f s):\n", times.back());
+  double base = 0.0;
+  for (const auto& p : points) {
+    if (p.budgetSeconds != times.back()) continue;
+    const double eff = 1.0 / (p.relmse * p.seconds);
+    if (base == 0.0) base = eff;
+    std::printf("  %-14s %10.4g   (x%.2f vs %s)\n", p.strategy.c_str(), eff, eff / base, strategies.front().c_str());
+  }
+  std::printf("wrote %s and %s\n", csv.c_str(), svg.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Candela: progressive CPU path tracer for heterogeneous volumes (batch tools)"};
+  app.require_subcommand(1);
+
+  std::string scenePath, out, preset, refPath, strategies, times, refStrategy = "conventional";
+  std::vector<std::string> sets;
+  int spp = 0, seed = -1, threads = 0, refSpp = 1024;
+  double seconds = 0.0;
+
+  auto* r = app.add_subcommand("render", "Render a scene to an EXR (scene-linear) or PNG (sRGB) image");
+  r->add_option("scene", scenePath, "Scene JSON file")->required()->check(CLI::ExistingFile);
+  r->add_option("-o,--output", out, "Output image (.exr or .png)")->required();
+  auto* sppOpt = r->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
+  r->add_option("--time", seconds, "Render for this many seconds instead")->check(CLI::PositiveNumber)->excludes(sppOpt);
+  r->add_option("--seed", seed, "Random seed")->check(CLI::NonNegativeNumber);
+  r->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
+  r->add_option("--strategy", preset, "Strategy preset: " + [] {
+    std::string s;
+    for (const auto& n : strategyPresetNames()) s += (s.empty() ? "" : ", ") + n;
+    return s;
+  }());
+  r->add_option("--set", sets, "Edit any scene or strategy parameter by JSON path, e.g. volumes.0.g=0.5");
+
+  auto* b = app.add_subcommand("bench", "Equal-time convergence of strategies against a reference");
+  b->add_option("scene", scenePath, "Scene JSON file")->required()->check(CLI::ExistingFile);
+  b->add_option("--strategies", strategies, "Comma-separated strategy presets")->required();
+  b->add_option("--times", times, "Comma-separated time budgets in seconds")->required();
+  auto* refOpt = b->add_option("--reference", refPath, "Reference EXR")->check(CLI::ExistingFile);
+  b->add_option("--reference-spp", refSpp, "Render (or reuse the cached) reference at this spp")->excludes(refOpt)->check(CLI::PositiveNumber);
+  b->add_option("--reference-strategy", refStrategy, "Strategy preset of the rendered reference");
+  b->add_option("-o,--output", out, "Output directory")->required();
+  b->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
+  b->add_option("--set", sets, "Edit any scene or strategy parameter by JSON path");
+
+  std::string genType;
+  GeneratorDesc gen;
+  std::vector<float> size;
+  auto* g = app.add_subcommand("generate", "Write a built-in procedural volume to a .vdb file");
+  g->add_option("type", genType, "constant, ramp, torch, mist, cloud or plume")->required();
+  g->add_option("-o,--output", out, "Output .vdb")->required();
+  g->add_option("--seed", gen.seed, "Noise seed");
+  g->add_option("--resolution", gen.resolution, "Voxels along the longest axis")->check(CLI::Range(2, 1024));
+  g->add_option("--size", size, "World extent X,Y,Z")->delimiter(',')->expected(3);
+  g->add_option("--value", gen.value, "constant/ramp density");
+  g->add_option("--temperature", gen.temperature, "constant/ramp temperature");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (r->parsed()) return render(scenePath, out, spp, seconds, seed, threads, preset, sets);
+    if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets);
+    if (g->parsed()) {
+      gen.type = genType;
+      if (size.size() == 3) gen.size = Vec3(size[0], size[1], size[2]);
+      VolumeDesc check;
+      check.has_generator = true;
+      check.generator = gen;
+      Json j = toJson(gen);
+      GeneratorDesc validated;
+      fromJson(j, validated, "generate", "generator");
+      const auto t0 = std::chrono::steady_clock::now();
+      writeGeneratedVolume(validated, out);
+      std::printf("wrote %s (%s) in %.2f s\n", out.c_str(), genType.c_str(),
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      return 0;
+    }
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

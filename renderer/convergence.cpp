@@ -1,0 +1,148 @@
+#include "convergence.h"
+
+#include "procedural.h"
+#include "renderer.h"
+#include "rng.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace candela {
+
+const char* const kRelMseFormula =
+    "relmse = mean over pixels and channels of (I - R)^2 / (R^2 + eps) with eps = (0.1 * mean(R))^2; "
+    "mse = mean over pixels and channels of (I - R)^2; I the render, R the reference";
+
+ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference) {
+  ErrorMetrics e;
+  if (image.size() != reference.size() || image.empty()) return {NAN, NAN};
+  double refMean = 0.0;
+  for (float r : reference) refMean += r;
+  refMean /= static_cast<double>(reference.size());
+  const double eps = std::max(1e-12, (0.1 * refMean) * (0.1 * refMean));
+  for (size_t i = 0; i < image.size(); ++i) {
+    const double d = static_cast<double>(image[i]) - reference[i];
+    e.mse += d * d;
+    e.relmse += d * d / (static_cast<double>(reference[i]) * reference[i] + eps);
+  }
+  e.mse /= static_cast<double>(image.size());
+  e.relmse /= static_cast<double>(image.size());
+  return e;
+}
+
+std::string sceneContentHash(const SceneDesc& scene, const std::string& extra) {
+  Json doc = sceneToJson(scene);
+  doc.erase("strategy");
+  doc["render"].erase("spp");
+  doc["render"].erase("time_s");
+  const std::string text = doc.dump() + "|" + extra;
+  uint64_t h = 0xcafef00dULL;
+  for (char c : text) h = hashCombine(h, static_cast<uint64_t>(static_cast<unsigned char>(c)));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+Image cachedReference(const SceneDesc& scene, const StrategySettings& strategy, int spp, int threads, std::string* cachePath) {
+  namespace fs = std::filesystem;
+  const std::string key = sceneContentHash(scene, "reference-v1 spp=" + std::to_string(spp) + " " + toJson(strategy).dump());
+  const fs::path dir = fs::path(cacheDirectory()) / "references";
+  const fs::path path = dir / (key + ".exr");
+  if (cachePath) *cachePath = path.string();
+  if (fs::exists(path)) return readExr(path.string());
+  SceneDesc desc = scene;
+  desc.strategy = strategy;
+  desc.render.seed = scene.render.seed + 0x5eedu;  // independent of the renders it judges
+  auto built = Scene::build(desc);
+  ProgressiveRenderer renderer(built, RenderOptions{threads, 32});
+  Film film;
+  const double seconds = renderer.renderBudget(film, spp, 0.0, std::max(1, std::min(spp, 16)));
+  Image image;
+  image.width = film.width();
+  image.height = film.height();
+  image.rgb = film.meanImage();
+  image.metadata["scene"] = scene.path;
+  image.metadata["strategy"] = toJson(strategy).dump();
+  image.metadata["spp"] = std::to_string(film.spp());
+  image.metadata["seconds"] = std::to_string(seconds);
+  fs::create_directories(dir);
+  const fs::path tmp = dir / (key + ".tmp.exr");
+  writeExr(tmp.string(), image);
+  fs::rename(tmp, path);
+  return image;
+}
+
+void writeConvergenceCsv(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& comment) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write");
+  out << "# " << kRelMseFormula << "\n";
+  if (!comment.empty()) out << "# " << comment << "\n";
+  out << "strategy,budget_s,time_s,spp,mse,relmse,rejected\n";
+  for (const auto& p : points)
+    out << p.strategy << ',' << p.budgetSeconds << ',' << p.seconds << ',' << p.spp << ',' << p.mse << ',' << p.relmse << ','
+        << p.rejected << '\n';
+}
+
+void writeConvergenceSvg(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& title) {
+  std::map<std::string, std::vector<const ConvergencePoint*>> series;
+  std::vector<std::string> order;
+  double tMin = 1e30, tMax = -1e30, eMin = 1e30, eMax = -1e30;
+  for (const auto& p : points) {
+    if (!(p.relmse > 0.0) || !(p.seconds > 0.0) || !std::isfinite(p.relmse)) continue;
+    if (!series.count(p.strategy)) order.push_back(p.strategy);
+    series[p.strategy].push_back(&p);
+    tMin = std::min(tMin, p.seconds), tMax = std::max(tMax, p.seconds);
+    eMin = std::min(eMin, p.relmse), eMax = std::max(eMax, p.relmse);
+  }
+  if (order.empty()) tMin = 0.1, tMax = 1, eMin = 0.01, eMax = 1;
+  const double lt0 = std::floor(std::log10(tMin)), lt1 = std::max(lt0 + 1, std::ceil(std::log10(tMax)));
+  const double le0 = std::floor(std::log10(eMin)), le1 = std::max(le0 + 1, std::ceil(std::log10(eMax)));
+  const double W = 720, H = 480, L = 80, R = 180, T = 50, B = 60;
+  auto X = [&](double t) { return L + (std::log10(t) - lt0) / (lt1 - lt0) * (W - L - R); };
+  auto Y = [&](double e) { return H - B - (std::log10(e) - le0) / (le1 - le0) * (H - T - B); };
+  static const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+  std::ostringstream s;
+  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' font-size='12'>\n"
+    << "<rect width='100%' height='100%' fill='white'/>\n"
+    << "<text x='" << W / 2 << "' y='24' text-anchor='middle' font-size='15'>" << title << "</text>\n";
+  for (double d = lt0; d <= lt1 + 1e-9; ++d) {
+    for (int m = 1; m < 10 && d + std::log10(m) <= lt1 + 1e-9; ++m) {
+      const double x = X(std::pow(10.0, d) * m);
+      s << "<line x1='" << x << "' y1='" << T << "' x2='" << x << "' y2='" << H - B << "' stroke='" << (m == 1 ? "#bbb" : "#eee") << "'/>\n";
+    }
+    s << "<text x='" << X(std::pow(10.0, d)) << "' y='" << H - B + 18 << "' text-anchor='middle'>" << std::pow(10.0, d) << "</text>\n";
+  }
+  for (double d = le0; d <= le1 + 1e-9; ++d) {
+    for (int m = 1; m < 10 && d + std::log10(m) <= le1 + 1e-9; ++m) {
+      const double y = Y(std::pow(10.0, d) * m);
+      s << "<line x1='" << L << "' y1='" << y << "' x2='" << W - R << "' y2='" << y << "' stroke='" << (m == 1 ? "#bbb" : "#eee") << "'/>\n";
+    }
+    s << "<text x='" << L - 8 << "' y='" << Y(std::pow(10.0, d)) + 4 << "' text-anchor='end'>1e" << d << "</text>\n";
+  }
+  s << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B << "' fill='none' stroke='black'/>\n"
+    << "<text x='" << (L + W - R) / 2 << "' y='" << H - 18 << "' text-anchor='middle'>render time (s, log)</text>\n"
+    << "<text transform='translate(20," << (T + H - B) / 2 << ") rotate(-90)' text-anchor='middle'>relMSE (log)</text>\n";
+  for (size_t i = 0; i < order.size(); ++i) {
+    auto& pts = series[order[i]];
+    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->seconds < b->seconds; });
+    const char* c = colors[i % 8];
+    s << "<polyline fill='none' stroke='" << c << "' stroke-width='2' points='";
+    for (auto* p : pts) s << X(p->seconds) << ',' << Y(p->relmse) << ' ';
+    s << "'/>\n";
+    for (auto* p : pts) s << "<circle cx='" << X(p->seconds) << "' cy='" << Y(p->relmse) << "' r='3.5' fill='" << c << "'/>\n";
+    const double ly = T + 20 + 22 * static_cast<double>(i);
+    s << "<line x1='" << W - R + 15 << "' y1='" << ly << "' x2='" << W - R + 40 << "' y2='" << ly << "' stroke='" << c
+      << "' stroke-width='3'/><text x='" << W - R + 46 << "' y='" << ly + 4 << "'>" << order[i] << "</text>\n";
+  }
+  s << "</svg>\n";
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write");
+  out << s.str();
+}
+
+}  // namespace candela

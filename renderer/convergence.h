@@ -1,0 +1,45 @@
+// Error-versus-time measurement (the CLI's bench command): error metrics against a reference,
+// cached high-spp references, and the convergence CSV and SVG chart.
+#pragma once
+
+#include "image_io.h"
+#include "scene_desc.h"
+
+#include <string>
+#include <vector>
+
+namespace candela {
+
+struct ErrorMetrics {
+  double mse = 0.0;
+  double relmse = 0.0;
+};
+
+// mse    = mean over pixels and channels of (I - R)^2
+// relmse = mean over pixels and channels of (I - R)^2 / (R^2 + eps), eps = (0.01 * mean(R))^2 ... see kRelMseFormula
+extern const char* const kRelMseFormula;
+ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference);
+
+// A stable hash of everything that decides the expected image (camera, scene content, render
+// settings but spp/time), plus `extra` (reference strategy and spp).
+std::string sceneContentHash(const SceneDesc& scene, const std::string& extra);
+
+// The reference for a scene: loaded from the cache or rendered with `strategy` at `spp` and cached
+// under cacheDirectory()/references. `log` receives progress lines.
+Image cachedReference(const SceneDesc& scene, const StrategySettings& strategy, int spp, int threads, std::string* cachePath = nullptr);
+
+struct ConvergencePoint {
+  std::string strategy;
+  double budgetSeconds = 0.0;
+  double seconds = 0.0;
+  int spp = 0;
+  double mse = 0.0;
+  double relmse = 0.0;
+  uint64_t rejected = 0;
+};
+
+void writeConvergenceCsv(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& comment);
+// Error versus time on log-log axes, one line per strategy.
+void writeConvergenceSvg(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& title);
+
+}  // namespace candela

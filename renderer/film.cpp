@@ -1,0 +1,57 @@
+#include "film.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace candela {
+
+void Film::resize(int width, int height) {
+  width_ = width;
+  height_ = height;
+  const size_t n = 3 * static_cast<size_t>(width) * height;
+  sum_.assign(n, 0.0f);
+  sumSq_.assign(n, 0.0f);
+  rowRejected_.assign(static_cast<size_t>(height), 0);
+  spp_ = 0;
+  rejected_ = 0;
+}
+
+void Film::clear() { resize(width_, height_); }
+
+Rgb Film::mean(int x, int y) const {
+  if (spp_ == 0) return Rgb(0.0f);
+  const size_t i = 3 * (static_cast<size_t>(y) * width_ + x);
+  return Rgb(sum_[i], sum_[i + 1], sum_[i + 2]) / static_cast<float>(spp_);
+}
+
+Rgb Film::standardError(int x, int y) const {
+  if (spp_ < 2) return Rgb(kInfinity);
+  const size_t i = 3 * (static_cast<size_t>(y) * width_ + x);
+  const float n = static_cast<float>(spp_);
+  Rgb se;
+  for (int c = 0; c < 3; ++c) {
+    const float m = sum_[i + c] / n;
+    const float var = std::max(0.0f, (sumSq_[i + c] / n - m * m) * n / (n - 1.0f));
+    se[c] = std::sqrt(var / n);
+  }
+  return se;
+}
+
+std::vector<float> Film::meanImage() const {
+  std::vector<float> out(sum_.size(), 0.0f);
+  if (spp_ == 0) return out;
+  const float inv = 1.0f / static_cast<float>(spp_);
+  for (size_t i = 0; i < out.size(); ++i) out[i] = sum_[i] * inv;
+  return out;
+}
+
+void Film::addPass(const Film& pass) {
+  for (size_t i = 0; i < sum_.size(); ++i) {
+    sum_[i] += pass.sum_[i];
+    sumSq_[i] += pass.sumSq_[i];
+  }
+  spp_ += pass.spp_;
+  rejected_ += std::accumulate(pass.rowRejected_.begin(), pass.rowRejected_.end(), uint64_t{0}) + pass.rejected_;
+}
+
+}  // namespace candela

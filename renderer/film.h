@@ -1,0 +1,62 @@
+// Float32 accumulation film: per pixel the sum and the sum of squares of the samples (RGB), so the
+// variance of each pixel's mean is known. Samples with NaN, Inf or negative values are rejected and
+// counted; they contribute zero but still count as samples, so the estimate stays normalised.
+#pragma once
+
+#include "core.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace candela {
+
+class Film {
+ public:
+  Film() = default;
+  Film(int width, int height) { resize(width, height); }
+  void resize(int width, int height);
+  void clear();
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int spp() const { return spp_; }                     // samples per pixel accumulated
+  uint64_t rejectedSamples() const { return rejected_; }
+
+  Rgb mean(int x, int y) const;
+  // Standard error of the pixel mean, per channel.
+  Rgb standardError(int x, int y) const;
+  // The whole image as interleaved RGB means.
+  std::vector<float> meanImage() const;
+
+  const std::vector<float>& sum() const { return sum_; }
+  const std::vector<float>& sumSquares() const { return sumSq_; }
+
+  // Adds a finished pass of `spp` samples per pixel (the renderer's pass buffer).
+  void addPass(const Film& pass);
+  // Adds one sample to pixel (x, y) of a pass buffer; returns false (and counts it) if rejected.
+  bool addSample(int x, int y, const Rgb& value) {
+    const size_t i = 3 * (static_cast<size_t>(y) * width_ + x);
+    if (!isFinite(value) || value.r < 0.0f || value.g < 0.0f || value.b < 0.0f) {
+      ++rejectedLocal(y);
+      return false;
+    }
+    sum_[i] += value.r;
+    sum_[i + 1] += value.g;
+    sum_[i + 2] += value.b;
+    sumSq_[i] += value.r * value.r;
+    sumSq_[i + 1] += value.g * value.g;
+    sumSq_[i + 2] += value.b * value.b;
+    return true;
+  }
+  void setPassSpp(int spp) { spp_ = spp; }
+
+ private:
+  // Per-row counters so parallel tiles never share a counter (rows of a tile belong to one task).
+  uint64_t& rejectedLocal(int y) { return rowRejected_[static_cast<size_t>(y)]; }
+  int width_ = 0, height_ = 0, spp_ = 0;
+  uint64_t rejected_ = 0;
+  std::vector<float> sum_, sumSq_;
+  std::vector<uint64_t> rowRejected_;
+};
+
+}  // namespace candela

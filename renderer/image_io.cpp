@@ -1,0 +1,133 @@
+#include "image_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
+#include <ImfStringAttribute.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace candela {
+
+float srgbEncode(float x) {
+  if (!(x > 0.0f)) return 0.0f;
+  if (x >= 1.0f) return 1.0f;
+  return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+
+void writeExr(const std::string& path, const Image& image) {
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const auto& [k, v] : image.metadata) header.insert("candela/" + k, Imf::StringAttribute(v));
+    const char* names[3] = {"R", "G", "B"};
+    for (const char* n : names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile file(path.c_str(), header);
+    Imf::FrameBuffer fb;
+    const size_t xs = 3 * sizeof(float), ys = xs * static_cast<size_t>(image.width);
+    for (int c = 0; c < 3; ++c)
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(image.rgb.data()) + c), xs, ys));
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": cannot write EXR (" + e.what() + ")");
+  }
+}
+
+Image readExr(const std::string& path) {
+  Image image;
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    image.width = dw.max.x - dw.min.x + 1;
+    image.height = dw.max.y - dw.min.y + 1;
+    image.rgb.assign(3 * static_cast<size_t>(image.width) * image.height, 0.0f);
+    Imf::FrameBuffer fb;
+    const size_t xs = 3 * sizeof(float), ys = xs * static_cast<size_t>(image.width);
+    const char* names[3] = {"R", "G", "B"};
+    char* base = reinterpret_cast<char*>(image.rgb.data()) - (dw.min.x * xs + dw.min.y * ys);
+    for (int c = 0; c < 3; ++c) fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, 0.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    for (auto it = file.header().begin(); it != file.header().end(); ++it) {
+      const std::string name = it.name();
+      if (name.rfind("candela/", 0) == 0)
+        if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) image.metadata[name.substr(8)] = s->value();
+    }
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": cannot read EXR (" + e.what() + ")");
+  }
+  return image;
+}
+
+void writePng(const std::string& path, const Image& image, float exposureStops) {
+  std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (!fp) throw std::runtime_error(path + ": cannot open for writing");
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error(path + ": PNG write failed");
+  }
+  png_init_io(png, fp.get());
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  std::vector<png_text> texts;
+  std::vector<std::string> keys;
+  for (const auto& [k, v] : image.metadata) keys.push_back("candela:" + k);
+  size_t ki = 0;
+  for (const auto& [k, v] : image.metadata) {
+    png_text t{};
+    t.compression = PNG_TEXT_COMPRESSION_NONE;
+    t.key = const_cast<char*>(keys[ki++].c_str());
+    t.text = const_cast<char*>(v.c_str());
+    t.text_length = v.size();
+    texts.push_back(t);
+  }
+  if (!texts.empty()) png_set_text(png, info, texts.data(), static_cast<int>(texts.size()));
+  png_write_info(png, info);
+  const float gain = std::exp2(exposureStops);
+  std::vector<png_byte> row(3 * static_cast<size_t>(image.width));
+  for (int y = 0; y < image.height; ++y) {
+    for (int i = 0; i < 3 * image.width; ++i)
+      row[static_cast<size_t>(i)] = static_cast<png_byte>(std::lround(255.0f * srgbEncode(image.rgb[3 * static_cast<size_t>(y) * image.width + i] * gain)));
+    png_write_row(png, row.data());
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+}
+
+Image readPng(const std::string& path) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&img, path.c_str())) throw std::runtime_error(path + ": cannot read PNG (" + img.message + ")");
+  img.format = PNG_FORMAT_RGB;
+  std::vector<png_byte> bytes(PNG_IMAGE_SIZE(img));
+  if (!png_image_finish_read(&img, nullptr, bytes.data(), 0, nullptr)) throw std::runtime_error(path + ": cannot read PNG");
+  Image out;
+  out.width = static_cast<int>(img.width);
+  out.height = static_cast<int>(img.height);
+  out.rgb.resize(bytes.size());
+  for (size_t i = 0; i < bytes.size(); ++i) out.rgb[i] = bytes[i] / 255.0f;
+  return out;
+}
+
+void writeImage(const std::string& path, const Image& image) {
+  auto ends = [&](const char* ext) {
+    const std::string e(ext);
+    return path.size() >= e.size() && std::equal(e.rbegin(), e.rend(), path.rbegin(), [](char a, char b) { return a == std::tolower(b); });
+  };
+  if (ends(".exr")) return writeExr(path, image);
+  if (ends(".png")) return writePng(path, image);
+  throw std::runtime_error(path + ": expected an output ending in .exr or .png");
+}
+
+}  // namespace candela

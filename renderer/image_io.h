@@ -1,0 +1,28 @@
+// Image files: scene-linear EXR (float RGB) and display PNG (plain sRGB transfer for now), both
+// carrying string metadata (scene path, settings JSON, spp, time).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgb;  // interleaved, scene-linear
+  std::map<std::string, std::string> metadata;
+};
+
+void writeExr(const std::string& path, const Image& image);
+Image readExr(const std::string& path);
+// Applies exposure (stops) and the sRGB transfer function, clamps, writes 8-bit RGB.
+void writePng(const std::string& path, const Image& image, float exposureStops = 0.0f);
+// Reads an 8-bit PNG as display values in [0, 1] (for tests and figures).
+Image readPng(const std::string& path);
+// Writes by extension: .exr or .png. Throws std::runtime_error on other extensions or I/O errors.
+void writeImage(const std::string& path, const Image& image);
+
+float srgbEncode(float linear);
+
+}  // namespace candela

@@ -1,0 +1,73 @@
+// One heterogeneous medium: its grids (compact NanoVDB form), its parameters and its majorant grid.
+// Coefficients (METHOD.md s.0): mu_t(x) = density(x) * sigma_t_scale (grey), mu_s = albedo * mu_t,
+// mu_a = (1 - albedo) * mu_t, HG phase with g, source term mu_a * Le.
+#pragma once
+
+#include "blackbody.h"
+#include "majorant.h"
+#include "scene_desc.h"
+#include "voxel_grid.h"
+
+#include <memory>
+#include <string>
+
+namespace candela {
+
+class Medium {
+ public:
+  // `temperature` / `emission` may be invalid grids when the emission mode does not use them.
+  Medium(const VolumeDesc& desc, VoxelGrid density, VoxelGrid temperature, VoxelGrid emission);
+
+  const VolumeDesc& desc() const { return desc_; }
+  const std::string& name() const { return desc_.name; }
+  const VoxelGrid& densityGrid() const { return density_; }
+  const MajorantGrid& majorantGrid() const { return majorant_; }
+  const Mat4& indexFromWorld() const { return indexFromWorld_; }
+  const Mat4& worldFromIndex() const { return worldFromIndex_; }
+  bool emissive() const { return emissive_; }
+  float sigmaTScale() const { return desc_.sigma_t_scale; }
+  const Rgb& albedo() const { return albedo_; }
+  float albedoAverage() const { return albedoAverage_; }
+  float g() const { return desc_.g; }
+  // World-space bounds of the majorant domain (for framing and light sizes).
+  void worldBounds(Vec3& lo, Vec3& hi) const;
+
+  // Rebuilds the majorant grid when its structure changed, and the per-cell majorants always
+  // (cheap: one multiply per cell).
+  void applyPolicy(const MajorantPolicy& policy);
+  // Majorant of mu_t in a cell of the majorant grid (world units).
+  float cellMajorant(int cell) const { return cellMajorant_[static_cast<size_t>(cell)]; }
+
+  // Per-thread lookups with accessor caches. Positions are in this medium's density index space.
+  class Sampler {
+   public:
+    explicit Sampler(const Medium& m);
+    float sigmaT(const Vec3& indexPos) const { return density_.trilinear(indexPos) * medium_->desc_.sigma_t_scale; }
+    // Le at the point: the radiance the medium emits there (its source term is mu_a * Le).
+    Rgb emission(const Vec3& indexPos) const;
+
+   private:
+    const Medium* medium_;
+    VoxelGrid::Sampler density_;
+    VoxelGrid::Sampler aux_;
+  };
+
+ private:
+  VolumeDesc desc_;
+  VoxelGrid density_, aux_;  // aux: temperature (blackbody) or emission grid
+  Mat4 worldFromIndex_{1.0f}, indexFromWorld_{1.0f};
+  Mat4 auxFromDensityIndex_{1.0f};
+  bool auxSameIndex_ = true;
+  bool emissive_ = false;
+  Rgb albedo_{0.0f};
+  float albedoAverage_ = 0.0f;
+  MajorantGrid majorant_;
+  MajorantStructure builtStructure_ = MajorantStructure::Grid;
+  int builtCellSize_ = -1;
+  std::vector<float> cellMajorant_;
+};
+
+// The volume placement as a matrix: translate * rotateZ * rotateY * rotateX * scale.
+Mat4 transformMatrix(const TransformDesc& t);
+
+}  // namespace candela

@@ -1,0 +1,22 @@
+// Built-in procedural volumes (METHOD.md s.0 scenes): torch flame, mist, cloud, smoke plume and the
+// closed-form test shapes. Deterministic for a given description; written as real .vdb files.
+#pragma once
+
+#include "scene_desc.h"
+
+#include <string>
+
+namespace candela {
+
+// Where generated volumes and reference renders are cached: $CANDELA_CACHE_DIR, else
+// $XDG_CACHE_HOME/candela, else $HOME/.cache/candela, else /tmp/candela-cache.
+std::string cacheDirectory();
+
+// Writes the generator's grids ("density", and "temperature" for torch, plume and any constant or
+// ramp with a temperature) to `path` as an OpenVDB file.
+void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path);
+
+// The cached .vdb for a generator, generating it first when it is not cached yet.
+std::string cachedGeneratedVolume(const GeneratorDesc& gen);
+
+}  // namespace candela

@@ -1,0 +1,95 @@
+#include "renderer.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <thread>
+
+namespace candela {
+
+ProgressiveRenderer::ProgressiveRenderer(std::shared_ptr<const Scene> scene, RenderOptions options)
+    : scene_(std::move(scene)), options_(options) {}
+
+bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool>* cancel) {
+  const Camera& camera = scene_->camera();
+  const int w = camera.width(), h = camera.height();
+  if (film.width() != w || film.height() != h) film.resize(w, h);
+  Film pass(w, h);
+  const int tilesX = (w + options_.tileSize - 1) / options_.tileSize;
+  const int tilesY = (h + options_.tileSize - 1) / options_.tileSize;
+  const int firstSample = film.spp();
+  const uint64_t seed = scene_->render().seed;
+  std::atomic<bool> cancelled{false};
+  PathTracer tracer(*scene_);
+
+  auto renderTile = [&](int tile) {
+    const int x0 = (tile % tilesX) * options_.tileSize, y0 = (tile / tilesX) * options_.tileSize;
+    const int x1 = std::min(w, x0 + options_.tileSize), y1 = std::min(h, y0 + options_.tileSize);
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        if (cancel && cancel->load(std::memory_order_relaxed)) {
+          cancelled = true;
+          return;
+        }
+        const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
+        for (int s = 0; s < spp; ++s) {
+          Rng rng(hashCombine(pixelKey, static_cast<uint64_t>(firstSample + s)), pixelKey);
+          const float jx = rng.uniform(), jy = rng.uniform();
+          const Ray ray = camera.generate(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
+          pass.addSample(x, y, tracer.radiance(ray, rng));
+        }
+      }
+  };
+  const int tiles = tilesX * tilesY;
+  auto run = [&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+      for (int t = r.begin(); t != r.end(); ++t) {
+        if (cancelled.load(std::memory_order_relaxed)) return;
+        renderTile(t);
+      }
+    }, tbb::simple_partitioner());
+  };
+  if (options_.threads > 0) {
+    tbb::task_arena arena(options_.threads);
+    arena.execute(run);
+  } else {
+    run();
+  }
+  if (cancelled) return false;
+  pass.setPassSpp(spp);
+  film.addPass(pass);
+  return true;
+}
+
+double ProgressiveRenderer::renderBudget(Film& film, int spp, double seconds, int passSpp) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  if (seconds <= 0.0) {
+    while (film.spp() < spp) renderPass(film, std::min(passSpp, spp - film.spp()));
+    return elapsed();
+  }
+  // A watchdog cancels the pass in flight when the clock runs out: the budget is honoured to within
+  // milliseconds, and the unfinished pass is discarded.
+  std::atomic<bool> cancel{false};
+  std::atomic<bool> finished{false};
+  std::thread watchdog([&] {
+    while (!finished.load()) {
+      if (elapsed() >= seconds) {
+        cancel = true;
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  });
+  while (!cancel.load()) {
+    if (!renderPass(film, passSpp, &cancel)) break;
+  }
+  finished = true;
+  watchdog.join();
+  return elapsed();
+}
+
+}  // namespace candela

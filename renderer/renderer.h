@@ -1,0 +1,41 @@
+// Progressive rendering: passes of N samples per pixel accumulate into a Film. Tiles render in
+// parallel with TBB; a pass can be cancelled at any moment (checked between samples, so within a few
+// milliseconds) and a cancelled pass leaves the film untouched. Each camera sample draws from its own
+// random stream keyed by (seed, pixel, sample index), so a seed and spp give the same image
+// whatever the thread count or tile schedule.
+#pragma once
+
+#include "film.h"
+#include "integrator.h"
+#include "scene.h"
+
+#include <atomic>
+#include <functional>
+
+namespace candela {
+
+struct RenderOptions {
+  int threads = 0;     // 0: all hardware threads
+  int tileSize = 32;
+};
+
+class ProgressiveRenderer {
+ public:
+  ProgressiveRenderer(std::shared_ptr<const Scene> scene, RenderOptions options = {});
+
+  // Renders `spp` more samples per pixel into `film` (resized to the camera if needed). Returns
+  // false, leaving `film` unchanged, if `cancel` became true during the pass.
+  bool renderPass(Film& film, int spp, const std::atomic<bool>* cancel = nullptr);
+
+  // Renders until `spp` samples per pixel or, when `seconds` > 0, until the clock runs out (the
+  // unfinished pass is discarded). Returns the seconds spent.
+  double renderBudget(Film& film, int spp, double seconds, int passSpp = 1);
+
+  const Scene& scene() const { return *scene_; }
+
+ private:
+  std::shared_ptr<const Scene> scene_;
+  RenderOptions options_;
+};
+
+}  // namespace candela

@@ -1,0 +1,105 @@
+#include "scene.h"
+
+#include "procedural.h"
+#include "vdb_io.h"
+
+#include <filesystem>
+
+namespace candela {
+
+Camera::Camera(const CameraDesc& d) : width_(d.resolution.first), height_(d.resolution.second) {
+  origin_ = d.position;
+  forward_ = glm::normalize(d.look_at - d.position);
+  right_ = glm::normalize(glm::cross(forward_, d.up));
+  up_ = glm::cross(right_, forward_);
+  tanHalf_ = std::tan(glm::radians(d.fov_y) * 0.5f);
+  aspect_ = static_cast<float>(width_) / static_cast<float>(height_);
+}
+
+Ray Camera::generate(float x, float y) const {
+  const float sx = (2.0f * x / static_cast<float>(width_) - 1.0f) * tanHalf_ * aspect_;
+  const float sy = (1.0f - 2.0f * y / static_cast<float>(height_)) * tanHalf_;
+  return Ray{origin_, glm::normalize(forward_ + sx * right_ + sy * up_)};
+}
+
+Scene::Scene(const SceneDesc& desc) : desc_(desc), camera_(desc.camera) {}
+
+std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::string>* warnings) {
+  namespace fs = std::filesystem;
+  if (desc.volumes.size() > static_cast<size_t>(kMaxMedia))
+    throw InputError(desc.path + ": volumes: expected at most " + std::to_string(kMaxMedia) + " volumes");
+  std::shared_ptr<Scene> scene(new Scene(desc));
+  const fs::path base = desc.path.empty() ? fs::path(".") : fs::path(desc.path).parent_path();
+  for (size_t i = 0; i < desc.volumes.size(); ++i) {
+    const VolumeDesc& v = desc.volumes[i];
+    const std::string field = "volumes." + std::to_string(i);
+    std::string path;
+    std::string density = v.density_grid, temperature = v.temperature_grid, emission = v.emission_grid;
+    if (v.has_generator) {
+      path = cachedGeneratedVolume(v.generator);
+      density = "density";
+      const bool hasTemperature = v.generator.type == "torch" || v.generator.type == "plume" || v.generator.temperature > 0.0f;
+      temperature = hasTemperature ? "temperature" : "";
+      emission.clear();
+      if (v.emission.mode == EmissionMode::Blackbody && !hasTemperature)
+        throw InputError(desc.path + ": " + field + ".emission.mode: \"blackbody\" needs a temperature grid; generator \"" +
+                         v.generator.type + "\" makes none (set generator.temperature > 0, or use a torch or plume)");
+      if (v.emission.mode == EmissionMode::Grid)
+        throw InputError(desc.path + ": " + field + ".emission.mode: generators make no emission grid; expected \"none\" or \"blackbody\"");
+    } else {
+      path = fs::path(v.file).is_absolute() ? v.file : (base / v.file).lexically_normal().string();
+    }
+    std::vector<std::string> names{density};
+    if (v.emission.mode == EmissionMode::Blackbody) names.push_back(temperature);
+    if (v.emission.mode == EmissionMode::Grid) names.push_back(emission);
+    std::vector<LoadedGrid> grids = loadVdbGrids(path, names, field);
+    for (const LoadedGrid& g : grids)
+      if (g.sanitizedVoxels > 0 && warnings)
+        warnings->push_back(path + ": " + field + ": grid \"" + g.grid.name() + "\" had " + std::to_string(g.sanitizedVoxels) +
+                            " NaN, infinite or negative values; they were set to 0");
+    VoxelGrid temperatureGrid, emissionGrid;
+    if (v.emission.mode == EmissionMode::Blackbody) temperatureGrid = grids[1].grid;
+    if (v.emission.mode == EmissionMode::Grid) emissionGrid = grids[1].grid;
+    auto medium = std::make_unique<Medium>(v, grids[0].grid, temperatureGrid, emissionGrid);
+    if (medium->majorantGrid().empty() && warnings)
+      warnings->push_back(path + ": " + field + ": grid \"" + density + "\" has no active voxels; the volume is empty");
+    medium->applyPolicy(desc.strategy.majorant);
+    scene->hasEmissiveMedia_ |= medium->emissive();
+    scene->media_.push_back(std::move(medium));
+  }
+  for (const auto& m : scene->media_) scene->mediaView_.media.push_back(m.get());
+
+  // Scene extent: the media, else the finite surfaces, else around the camera's target.
+  Vec3 lo(kInfinity), hi(-kInfinity);
+  for (const auto& m : scene->media_) {
+    Vec3 a, b;
+    m->worldBounds(a, b);
+    lo = glm::min(lo, a);
+    hi = glm::max(hi, b);
+  }
+  for (const auto& s : desc.surfaces) {
+    if (s.type == SurfaceType::Box) lo = glm::min(lo, s.min), hi = glm::max(hi, s.max);
+    if (s.type == SurfaceType::Sphere || s.type == SurfaceType::Cylinder) {
+      lo = glm::min(lo, s.center - Vec3(s.radius));
+      hi = glm::max(hi, s.center + Vec3(s.radius) + Vec3(0.0f, s.type == SurfaceType::Cylinder ? s.length : 0.0f, 0.0f));
+    }
+  }
+  if (lo.x <= hi.x) {
+    scene->center_ = 0.5f * (lo + hi);
+    scene->radius_ = std::max(1e-3f, 0.5f * glm::length(hi - lo));
+  } else {
+    scene->center_ = desc.camera.look_at;
+    scene->radius_ = std::max(1e-3f, glm::length(desc.camera.look_at - desc.camera.position));
+  }
+  for (const auto& l : desc.lights) scene->lights_.emplace_back(l);
+  scene->lightSampler_ = LightSampler(scene->lights_, scene->radius_);
+  scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
+  return scene;
+}
+
+void Scene::setStrategy(const StrategySettings& strategy) {
+  desc_.strategy = strategy;
+  for (auto& m : media_) m->applyPolicy(strategy.majorant);
+}
+
+}  // namespace candela

@@ -1,0 +1,232 @@
+// The scene file model: what a scene JSON holds, as plain structs. It models no more than the
+// built-in scenes need. Loading (scene_loader.cpp) validates every field and reports
+// "FILE: FIELD: expected ..., got ..." for anything wrong.
+#pragma once
+
+#include "settings.h"
+
+#include <string>
+#include <vector>
+
+namespace candela {
+
+struct CameraDesc {
+  Vec3 position{0.0f, 1.0f, 5.0f};
+  Vec3 look_at{0.0f};
+  Vec3 up{0.0f, 1.0f, 0.0f};
+  float fov_y = 40.0f;  // vertical field of view in degrees
+  std::pair<int, int> resolution{640, 360};
+
+  template <class V>
+  void visit(V& v) {
+    v.required("position", position, "Camera position (world units)");
+    v.required("look_at", look_at, "Point the camera looks at");
+    v.field("up", up, "Up direction");
+    v.field("fov_y", fov_y, "Vertical field of view in degrees", Range{0.1, 179.0});
+    v.field("resolution", resolution, "Image width and height in pixels", Range{1, 16384});
+  }
+};
+
+// A built-in procedural volume: deterministic for a given type, seed and resolution. It is written to
+// a real .vdb file in the cache and loaded like any other VDB.
+struct GeneratorDesc {
+  std::string type = "constant";  // constant | ramp | torch | mist | cloud | plume
+  uint32_t seed = 1;
+  int resolution = 64;            // voxels along the longest axis
+  Vec3 size{1.0f};                // world extent of the generated grid before the volume transform
+  float value = 1.0f;             // density of constant/ramp volumes (ramp: density at the +x end)
+  float temperature = 0.0f;       // constant/ramp: temperature written everywhere the density is
+
+  template <class V>
+  void visit(V& v) {
+    v.required("type", type, "constant, ramp, torch, mist, cloud or plume");
+    v.field("seed", seed, "Noise seed");
+    v.field("resolution", resolution, "Voxels along the longest axis", Range{2, 1024});
+    v.field("size", size, "World extent of the grid (before the transform)", Range{1e-4, 1e6});
+    v.field("value", value, "constant/ramp: density (ramp: at the +x end, 0 at the -x end)", Range{0.0, 1e6});
+    v.field("temperature", temperature, "constant/ramp: temperature grid value where density is non-zero", Range{0.0, 1e6});
+  }
+};
+
+enum class EmissionMode { None, Blackbody, Grid };
+template <>
+struct EnumNames<EmissionMode> {
+  static const std::vector<std::pair<EmissionMode, const char*>>& get() {
+    static const std::vector<std::pair<EmissionMode, const char*>> v{
+        {EmissionMode::None, "none"}, {EmissionMode::Blackbody, "blackbody"}, {EmissionMode::Grid, "grid"}};
+    return v;
+  }
+};
+
+// Le(x): blackbody(temperature * temperature_scale + temperature_offset) * intensity, or
+// emission grid * color * intensity. The source term is mu_a * Le (talk, Eq. 1).
+struct EmissionDesc {
+  EmissionMode mode = EmissionMode::None;
+  float intensity = 1.0f;
+  float temperature_scale = 1.0f;   // Kelvin per temperature-grid unit
+  float temperature_offset = 0.0f;  // Kelvin added after scaling
+  Vec3 color{1.0f};
+
+  template <class V>
+  void visit(V& v) {
+    v.field("mode", mode, "none, blackbody (temperature grid) or grid (emission grid x color)");
+    v.field("intensity", intensity, "Multiplies the emitted radiance", kNonNegative);
+    v.field("temperature_scale", temperature_scale, "Kelvin per temperature-grid unit", kNonNegative);
+    v.field("temperature_offset", temperature_offset, "Kelvin added after scaling", Range{-1e5, 1e5});
+    v.field("color", color, "Emission colour (grid mode)", kNonNegative);
+  }
+};
+
+struct TransformDesc {
+  Vec3 translate{0.0f};
+  Vec3 rotate_deg{0.0f};  // applied X, then Y, then Z
+  Vec3 scale{1.0f};
+
+  template <class V>
+  void visit(V& v) {
+    v.field("translate", translate, "World translation");
+    v.field("rotate_deg", rotate_deg, "Rotation in degrees about X, then Y, then Z");
+    v.field("scale", scale, "Scale along each axis", Range{1e-6, 1e6});
+  }
+};
+
+struct VolumeDesc {
+  std::string name;
+  std::string file;  // .vdb path, relative to the scene file
+  std::string density_grid = "density";
+  std::string temperature_grid;  // needed by blackbody emission
+  std::string emission_grid;     // needed by grid emission
+  bool has_generator = false;
+  GeneratorDesc generator;
+  TransformDesc transform;
+  float sigma_t_scale = 1.0f;  // extinction per unit density per world unit
+  Vec3 albedo{0.8f};
+  float g = 0.0f;  // Henyey-Greenstein anisotropy
+  EmissionDesc emission;
+
+  template <class V>
+  void visit(V& v) {
+    v.field("name", name, "Label used in messages and the UI");
+    v.field("file", file, "OpenVDB file (relative to the scene file)");
+    v.field("density_grid", density_grid, "Name of the float density grid");
+    v.field("temperature_grid", temperature_grid, "Name of the float temperature grid (blackbody emission)");
+    v.field("emission_grid", emission_grid, "Name of the float emission grid (grid emission)");
+    if (V::kWriting ? has_generator : v.has("generator")) {
+      has_generator = true;
+      v.object("generator", generator, "Built-in procedural volume instead of a file");
+    }
+    v.object("transform", transform, "Placement of the grid in the world");
+    v.field("sigma_t_scale", sigma_t_scale, "Extinction per unit density per world unit", Range{0.0, 1e6});
+    v.field("albedo", albedo, "Single-scattering albedo mu_s / mu_t per channel", kUnit);
+    v.field("g", g, "Henyey-Greenstein anisotropy: -1 back, 0 isotropic, 1 forward", Range{-0.999, 0.999});
+    v.object("emission", emission, "Volume emission");
+  }
+};
+
+enum class LightType { Point, Spot, Directional, Sphere, Environment };
+template <>
+struct EnumNames<LightType> {
+  static const std::vector<std::pair<LightType, const char*>>& get() {
+    static const std::vector<std::pair<LightType, const char*>> v{{LightType::Point, "point"},
+                                                                  {LightType::Spot, "spot"},
+                                                                  {LightType::Directional, "directional"},
+                                                                  {LightType::Sphere, "sphere"},
+                                                                  {LightType::Environment, "environment"}};
+    return v;
+  }
+};
+
+// One light. Which fields apply depends on `type`; the others are errors in a scene file.
+// point/spot: intensity in W/sr-like units (radiance * area); directional: irradiance;
+// sphere and environment: radiance.
+struct LightDesc {
+  LightType type = LightType::Point;
+  Vec3 color{1.0f};
+  float intensity = 1.0f;
+  Vec3 position{0.0f};
+  Vec3 direction{0.0f, -1.0f, 0.0f};  // spot: where it points; directional: where the light travels
+  float radius = 0.1f;                // sphere
+  float cone_angle_deg = 30.0f;       // spot: half-angle of the full cone
+  float cone_falloff_deg = 5.0f;      // spot: width of the soft edge inside the cone
+
+  template <class V>
+  void visit(V& v) {
+    v.required("type", type, "point, spot, directional, sphere or environment");
+    v.field("color", color, "Light colour (scene-linear)", kNonNegative);
+    v.field("intensity", intensity, "Multiplies the colour", kNonNegative);
+    if (type == LightType::Point || type == LightType::Spot || type == LightType::Sphere)
+      v.field("position", position, "Light position");
+    if (type == LightType::Spot || type == LightType::Directional)
+      v.field("direction", direction, "Spot: where it points; directional: where the light travels");
+    if (type == LightType::Sphere) v.field("radius", radius, "Sphere radius", Range{1e-5, 1e6});
+    if (type == LightType::Spot) {
+      v.field("cone_angle_deg", cone_angle_deg, "Half-angle of the cone in degrees", Range{0.1, 90.0});
+      v.field("cone_falloff_deg", cone_falloff_deg, "Soft edge width in degrees", Range{0.0, 90.0});
+    }
+  }
+};
+
+enum class SurfaceType { Plane, Box, Sphere, Cylinder };
+template <>
+struct EnumNames<SurfaceType> {
+  static const std::vector<std::pair<SurfaceType, const char*>>& get() {
+    static const std::vector<std::pair<SurfaceType, const char*>> v{{SurfaceType::Plane, "plane"},
+                                                                    {SurfaceType::Box, "box"},
+                                                                    {SurfaceType::Sphere, "sphere"},
+                                                                    {SurfaceType::Cylinder, "cylinder"}};
+    return v;
+  }
+};
+
+// Diffuse surfaces traced with Embree. plane: horizontal ground at `height` of half-width `size`;
+// box: min/max corners; sphere: center/radius; cylinder: vertical, base center, radius, height.
+struct SurfaceDesc {
+  SurfaceType type = SurfaceType::Plane;
+  Vec3 albedo{0.5f};
+  float height = 0.0f;
+  float size = 100.0f;
+  Vec3 min{-0.5f};
+  Vec3 max{0.5f};
+  Vec3 center{0.0f};
+  float radius = 0.5f;
+  float length = 1.0f;
+
+  template <class V>
+  void visit(V& v) {
+    v.required("type", type, "plane, box, sphere or cylinder");
+    v.field("albedo", albedo, "Diffuse reflectance", kUnit);
+    if (type == SurfaceType::Plane) {
+      v.field("height", height, "Height of the ground plane");
+      v.field("size", size, "Half-width of the plane", kPositive);
+    }
+    if (type == SurfaceType::Box) {
+      v.required("min", min, "Lower corner");
+      v.required("max", max, "Upper corner");
+    }
+    if (type == SurfaceType::Sphere || type == SurfaceType::Cylinder) {
+      v.required("center", center, type == SurfaceType::Sphere ? "Centre" : "Centre of the bottom cap");
+      v.required("radius", radius, "Radius", kPositive);
+    }
+    if (type == SurfaceType::Cylinder) v.required("length", length, "Height of the cylinder", kPositive);
+  }
+};
+
+struct SceneDesc {
+  std::string path;  // the file it came from ("" when built in code)
+  CameraDesc camera;
+  RenderSettings render;
+  StrategySettings strategy;
+  std::vector<VolumeDesc> volumes;
+  std::vector<LightDesc> lights;
+  std::vector<SurfaceDesc> surfaces;
+};
+
+// Reads and validates a scene file. `settings` are --set style edits applied to the JSON before
+// validation, so their errors read like the file's own.
+SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings = {});
+SceneDesc parseSceneDesc(const Json& doc, const std::string& path);
+Json sceneToJson(const SceneDesc& scene);
+// The document a scene file holds after --set edits, before validation.
+Json readSceneJson(const std::string& path);
+
+}  // namespace candela

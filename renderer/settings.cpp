@@ -1,0 +1,31 @@
+#include "settings.h"
+
+namespace candela {
+
+const std::vector<std::string>& strategyPresetNames() {
+  static const std::vector<std::string> names{"conventional"};
+  return names;
+}
+
+StrategySettings strategyPreset(const std::string& name, const std::string& origin) {
+  StrategySettings s;
+  s.preset = name;
+  if (name == "conventional") return s;  // METHOD.md section 2, "conventional": the baseline
+  std::string known;
+  for (const auto& n : strategyPresetNames()) known += (known.empty() ? "" : ", ") + n;
+  throw InputError(origin + ": expected a strategy preset (" + known + "), got \"" + name + "\"");
+}
+
+StrategySettings strategyFromJson(const Json& j, const std::string& file, const std::string& path) {
+  if (!j.is_object()) throw InputError(file + ": " + path + ": expected an object, got " + j.dump());
+  std::string preset = "conventional";
+  if (j.contains("preset")) {
+    if (!j["preset"].is_string()) throw InputError(file + ": " + path + ".preset: expected a string, got " + j["preset"].dump());
+    preset = j["preset"].get<std::string>();
+  }
+  StrategySettings s = strategyPreset(preset, file + ": " + path + ".preset");
+  fromJson(j, s, file, path);
+  return s;
+}
+
+}  // namespace candela

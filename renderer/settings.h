@@ -1,0 +1,74 @@
+// Render and strategy settings: plain structs that serialise to JSON. The same structs drive the
+// scene files, the CLI's --set flags, image metadata and (later) the viewer's panels.
+//
+// RenderSettings say *which* image (spp/time, path length): all strategies must converge to it.
+// StrategySettings say *how* it is sampled: every preset must agree with `conventional`.
+#pragma once
+
+#include "fields.h"
+
+#include <string>
+#include <vector>
+
+namespace candela {
+
+enum class MajorantStructure { Global, Grid };
+template <>
+struct EnumNames<MajorantStructure> {
+  static const std::vector<std::pair<MajorantStructure, const char*>>& get() {
+    static const std::vector<std::pair<MajorantStructure, const char*>> v{{MajorantStructure::Global, "global"},
+                                                                          {MajorantStructure::Grid, "grid"}};
+    return v;
+  }
+};
+
+// METHOD.md section 1: the majorant policy.
+struct MajorantPolicy {
+  MajorantStructure structure = MajorantStructure::Grid;
+  int cell_size = 8;             // voxels per majorant cell along each axis (grid structure)
+  float safety_factor = 1.0f;    // multiplies every majorant; >= 1
+
+  template <class V>
+  void visit(V& v) {
+    v.field("structure", structure, "global: one majorant for the whole volume; grid: one per coarse cell, walked by a 3D DDA");
+    v.field("cell_size", cell_size, "Voxels per majorant cell along each axis (grid structure). Smaller is tighter but more DDA steps", Range{1, 4096});
+    v.field("safety_factor", safety_factor, "Multiplies every majorant; keep 1 unless lookups can exceed the stored maxima", Range{1.0, 100.0});
+  }
+};
+
+struct StrategySettings {
+  std::string preset = "conventional";
+  MajorantPolicy majorant;
+  int russian_roulette_depth = 3;  // scattering events before Russian roulette may end a path
+
+  template <class V>
+  void visit(V& v) {
+    v.field("preset", preset, "Named starting point for the settings below (conventional)");
+    v.object("majorant", majorant, "How the majorant (the collision rate of null-collision tracking) is built");
+    v.field("russian_roulette_depth", russian_roulette_depth, "Scattering events before Russian roulette may end a path (unbiased)", Range{0, 100000});
+  }
+};
+
+// Names of the strategy presets, in the order the CLI lists them.
+const std::vector<std::string>& strategyPresetNames();
+// The settings of a preset; throws InputError naming `origin` for an unknown name.
+StrategySettings strategyPreset(const std::string& name, const std::string& origin = "strategy preset");
+// Reads a "strategy" object: the preset's settings first, then the object's own fields on top.
+StrategySettings strategyFromJson(const Json& j, const std::string& file, const std::string& path);
+
+struct RenderSettings {
+  int spp = 64;          // samples per pixel for a batch render
+  float time_s = 0.0f;   // when > 0, render until this many seconds have passed instead of spp
+  uint32_t seed = 1;
+  int max_depth = 32;    // most scattering or bounce events on a path
+
+  template <class V>
+  void visit(V& v) {
+    v.field("spp", spp, "Samples per pixel of a batch render", Range{1, 1 << 24});
+    v.field("time_s", time_s, "Render for this many seconds instead (0: use spp)", Range{0.0, 1e7});
+    v.field("seed", seed, "Random seed; a seed and spp give the same image on any thread count");
+    v.field("max_depth", max_depth, "Most scattering or surface-bounce events on a path", Range{0, 100000});
+  }
+};
+
+}  // namespace candela

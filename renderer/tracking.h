@@ -1,0 +1,168 @@
+// The one null-collision tracking loop (METHOD.md section 2). It merges the majorant DDAs of every
+// medium the ray crosses into one piecewise-constant combined majorant mu_bar, draws tentative
+// collisions with rate mu_bar (dt = -ln(1 - xi) / mu_bar), and hands each to a callback that
+// decides what the collision is: delta tracking, ratio tracking and (later) emission gathering all
+// differ only in that callback, never in copies of this loop. Segments with mu_bar = 0 cost nothing.
+#pragma once
+
+#include "medium.h"
+#include "rng.h"
+
+#include <vector>
+
+namespace candela {
+
+constexpr int kMaxMedia = 8;
+
+// The media of a scene as the hot loop sees them.
+struct MediaView {
+  std::vector<const Medium*> media;
+};
+
+// State of one medium along the current ray.
+struct MediumTrack {
+  const Medium* medium = nullptr;
+  Medium::Sampler sampler;
+  Vec3 o, d;  // ray in the medium's index space
+  MajorantDda dda;
+  float t0 = 0.0f, t1 = 0.0f;  // current DDA segment
+  float muBar = 0.0f;          // its majorant
+  bool done = false;           // left its domain
+  explicit MediumTrack(const Medium& m) : medium(&m), sampler(m) {}
+};
+
+// A tentative collision. Coefficients are evaluated for the media overlapping the point.
+struct Collision {
+  float t = 0.0f;
+  Vec3 p{0.0f};       // world position
+  float muBar = 0.0f; // combined majorant here
+  int count = 0;      // overlapping media
+  MediumTrack* track[kMaxMedia] = {};
+  float sigmaT[kMaxMedia] = {};
+  float sigmaTTotal = 0.0f;
+
+  Vec3 indexPos(int i) const { return track[i]->o + t * track[i]->d; }
+  const Medium& medium(int i) const { return *track[i]->medium; }
+  // mu_s per channel summed over media.
+  Rgb sigmaS() const {
+    Rgb s(0.0f);
+    for (int i = 0; i < count; ++i) s += track[i]->medium->albedo() * sigmaT[i];
+    return s;
+  }
+  // Source term sum_i mu_a,i * Le,i (talk Eq. 1), per channel. Non-emissive media cost nothing.
+  Rgb emissionSource() const {
+    Rgb s(0.0f);
+    for (int i = 0; i < count; ++i)
+      if (track[i]->medium->emissive() && sigmaT[i] > 0.0f)
+        s += (Rgb(1.0f) - track[i]->medium->albedo()) * sigmaT[i] * track[i]->sampler.emission(indexPos(i));
+    return s;
+  }
+};
+
+// Walks tentative collisions along `ray` over (0, tMax). `onCollision(Collision&)` returns true to
+// continue, false to stop. Returns true when the walk reached tMax (or left all media), false when
+// the callback stopped it.
+template <class OnCollision>
+bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng, OnCollision&& onCollision) {
+  // Set up every medium whose majorant domain the ray crosses. Stack storage: no allocation.
+  alignas(MediumTrack) unsigned char storage[kMaxMedia * sizeof(MediumTrack)];
+  MediumTrack* tracks = reinterpret_cast<MediumTrack*>(storage);
+  int n = 0;
+  for (const Medium* m : view.media) {
+    MediumTrack* tr = new (&tracks[n]) MediumTrack(*m);
+    const Mat4& ifw = m->indexFromWorld();
+    tr->o = Vec3(ifw * glm::vec4(ray.origin, 1.0f));
+    tr->d = Vec3(ifw * glm::vec4(ray.direction, 0.0f));
+    tr->dda = MajorantDda(m->majorantGrid(), tr->o, tr->d, 0.0f, tMax);
+    int cell;
+    if (tr->dda.next(tr->t0, tr->t1, cell)) {
+      tr->muBar = m->cellMajorant(cell);
+      ++n;
+    } else {
+      tr->~MediumTrack();
+    }
+  }
+  struct Cleanup {
+    MediumTrack* t;
+    int& n;
+    ~Cleanup() {
+      for (int i = 0; i < n; ++i) t[i].~MediumTrack();
+    }
+  } cleanup{tracks, n};
+
+  float t = 0.0f;
+  Collision c;
+  while (n > 0) {  // exits by break once every medium is done
+    // The merged segment starts at t and ends at the nearest boundary of any medium's segment.
+    float end = kInfinity, muBar = 0.0f;
+    c.count = 0;
+    for (int i = 0; i < n; ++i) {
+      if (tracks[i].done) continue;
+      if (tracks[i].t0 > t) {
+        end = std::min(end, tracks[i].t0);
+      } else {
+        end = std::min(end, tracks[i].t1);
+        if (tracks[i].muBar > 0.0f) {
+          muBar += tracks[i].muBar;
+          c.track[c.count++] = &tracks[i];
+        }
+      }
+    }
+    if (muBar > 0.0f) {
+      float tc = t;
+      for (;;) {
+        tc -= std::log1p(-rng.uniform()) / muBar;
+        if (!(tc < end)) break;
+        c.t = tc;
+        c.p = ray.at(tc);
+        c.muBar = muBar;
+        c.sigmaTTotal = 0.0f;
+        for (int i = 0; i < c.count; ++i) {
+          c.sigmaT[i] = c.track[i]->sampler.sigmaT(c.indexPos(i));
+          c.sigmaTTotal += c.sigmaT[i];
+        }
+        if (!onCollision(c)) return false;
+      }
+    }
+    t = end;
+    // Advance the media whose segment ended; those that left their domain are marked done.
+    int live = 0;
+    for (int i = 0; i < n; ++i) {
+      MediumTrack& tr = tracks[i];
+      if (tr.done) continue;
+      if (tr.t1 <= t) {
+        int cell;
+        if (tr.dda.next(tr.t0, tr.t1, cell)) {
+          tr.muBar = tr.medium->cellMajorant(cell);
+        } else {
+          tr.done = true;
+          continue;
+        }
+      }
+      ++live;
+    }
+    if (live == 0) break;
+  }
+  return true;
+}
+
+// Ratio-tracking transmittance (Novak et al. 2014) with Russian roulette once it is small:
+// T *= mu_n / mu_bar at every tentative collision. Unbiased; returns 0..1.
+inline float ratioTrackingTransmittance(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
+  float transmittance = 1.0f;
+  trackCollisions(view, ray, tMax, rng, [&](const Collision& c) {
+    transmittance *= std::max(0.0f, 1.0f - c.sigmaTTotal / c.muBar);
+    if (transmittance < 0.1f) {
+      // Roulette: survive with probability 10 T and carry 0.1, so the expectation stays T.
+      if (rng.uniform() >= transmittance * 10.0f) {
+        transmittance = 0.0f;
+        return false;
+      }
+      transmittance = 0.1f;
+    }
+    return true;
+  });
+  return transmittance;
+}
+
+}  // namespace candela
