@@ -52,7 +52,13 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     std::vector<std::string> names{density};
     if (v.emission.mode == EmissionMode::Blackbody) names.push_back(temperature);
     if (v.emission.mode == EmissionMode::Grid) names.push_back(emission);
-    std::vector<LoadedGrid> grids = loadVdbGrids(path, names, field);
+    std::vector<LoadedGrid> grids;
+    try {
+      grids = loadVdbGrids(path, names, field);
+    } catch (const InputError& e) {
+      // Name the scene file too: the user edits that, and it says which volume asked for the VDB.
+      throw InputError(desc.path + ": " + field + (v.has_generator ? ".generator" : ".file") + ": " + e.what());
+    }
     for (const LoadedGrid& g : grids)
       if (g.sanitizedVoxels > 0 && warnings)
         warnings->push_back(path + ": " + field + ": grid \"" + g.grid.name() + "\" had " + std::to_string(g.sanitizedVoxels) +

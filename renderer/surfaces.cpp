@@ -44,7 +44,8 @@ void addMesh(RTCDevice device, RTCScene scene, const std::vector<Vec3>& vertices
 
 Surfaces::Surfaces(const std::vector<SurfaceDesc>& surfaces) : impl_(std::make_unique<Impl>()), descs_(surfaces) {
   if (descs_.empty()) return;
-  impl_->device = rtcNewDevice("threads=1");  // the renderer parallelises over tiles itself
+  // No "threads=N" here: Embree would install a process-wide TBB limit and serialise our tiles.
+  impl_->device = rtcNewDevice(nullptr);
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
   for (size_t s = 0; s < descs_.size(); ++s) {

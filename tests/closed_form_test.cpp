@@ -1,0 +1,149 @@
+// Closed forms (METHOD.md s.5): transmittance through a homogeneous slab and a linear density ramp
+// (ratio tracking and delta tracking, every majorant policy); an emission-only slab
+// L = Le (1 - exp(-tau)); and a white furnace that must return the environment radiance exactly.
+#include "blackbody.h"
+#include "stats.h"
+#include "test_support.h"
+#include "tracking.h"
+
+#include <gtest/gtest.h>
+
+namespace candela {
+namespace {
+
+struct Estimate {
+  double mean = 0.0, standardError = 0.0;
+};
+
+// Mean and standard error of ratio-tracking and delta-tracking (escape probability) estimates.
+void estimateTransmittance(const Scene& scene, const Ray& ray, float distance, Estimate& ratio, Estimate& delta) {
+  constexpr int kRuns = 40000;
+  Rng rng(11, 5);
+  double s = 0, s2 = 0, escapes = 0;
+  for (int i = 0; i < kRuns; ++i) {
+    const double t = ratioTrackingTransmittance(scene.media(), ray, distance, rng);
+    s += t;
+    s2 += t * t;
+    const bool escaped = trackCollisions(scene.media(), ray, distance, rng, [&](const Collision& c) {
+      return rng.uniform() * c.muBar >= c.sigmaTTotal;  // real collision (any kind) stops the walk
+    });
+    escapes += escaped ? 1.0 : 0.0;
+  }
+  ratio.mean = s / kRuns;
+  ratio.standardError = std::sqrt(std::max(0.0, s2 / kRuns - ratio.mean * ratio.mean) / kRuns);
+  delta.mean = escapes / kRuns;
+  delta.standardError = std::sqrt(delta.mean * (1.0 - delta.mean) / kRuns);
+}
+
+const std::vector<std::string> kPolicies[] = {
+    {"strategy.majorant.structure=\"global\""},
+    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=1"},
+    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=8"},
+    {"strategy.majorant.safety_factor=3.0"},
+};
+
+TEST(ClosedForm, HomogeneousSlabTransmittance) {
+  for (const auto& policy : kPolicies) {
+    auto scene = Scene::build(test::loadScene("assets/scenes/test/slab.json", policy));
+    // Straight through the slab along -z: optical depth sigma_t * density * thickness = 2 * 1 * 0.5.
+    const Ray ray{Vec3(0.1f, -0.2f, 3.0f), Vec3(0.0f, 0.0f, -1.0f)};
+    Estimate ratio, delta;
+    estimateTransmittance(*scene, ray, 10.0f, ratio, delta);
+    const double expected = std::exp(-1.0);
+    EXPECT_NEAR(ratio.mean, expected, 5.0 * ratio.standardError + 1e-4) << policy[0];
+    EXPECT_NEAR(delta.mean, expected, 5.0 * delta.standardError + 1e-4) << policy[0];
+    // Stopping inside the slab, a quarter of the way through: tau = 0.25.
+    estimateTransmittance(*scene, ray, 3.0f - 0.125f, ratio, delta);
+    EXPECT_NEAR(ratio.mean, std::exp(-0.25), 5.0 * ratio.standardError + 1e-4);
+    EXPECT_NEAR(delta.mean, std::exp(-0.25), 5.0 * delta.standardError + 1e-4);
+  }
+}
+
+TEST(ClosedForm, LinearRampTransmittance) {
+  // density rises linearly from 0 at voxel 0 to `value` at voxel 63 along x: tau(s) = k s^2 / 2.
+  SceneDesc desc = test::loadScene("assets/scenes/test/slab.json");
+  VolumeDesc& v = desc.volumes[0];
+  v.generator.type = "ramp";
+  v.generator.resolution = 64;
+  v.generator.size = Vec3(2.0f, 1.0f, 1.0f);
+  v.generator.value = 1.0f;
+  v.sigma_t_scale = 3.0f;
+  for (const auto& policy : kPolicies) {
+    desc.strategy.majorant = MajorantPolicy{};
+    SceneDesc edited = parseSceneDesc([&] {
+      Json doc = sceneToJson(desc);
+      for (const auto& s : policy) applySetting(doc, s, "test");
+      return doc;
+    }(), "ramp");
+    auto scene = Scene::build(edited);
+    const float voxel = 2.0f / 64.0f;
+    const float x0 = -1.0f + 0.5f * voxel;       // centre of voxel 0, where the ramp starts
+    const float yz = -0.5f + 16.5f * voxel;      // a voxel centre in y and z: no interpolation across
+    const Ray ray{Vec3(x0 - 0.3f, yz, yz), Vec3(1.0f, 0.0f, 0.0f)};
+    const float slope = 3.0f * 1.0f / (63.0f * voxel);  // sigma_t per world unit, per world unit
+    for (float s : {0.5f, 1.0f, 1.5f, 1.9f}) {
+      Estimate ratio, delta;
+      estimateTransmittance(*scene, ray, 0.3f + s, ratio, delta);
+      const double expected = std::exp(-0.5 * slope * s * s);
+      EXPECT_NEAR(ratio.mean, expected, 5.0 * ratio.standardError + 1e-4) << "s = " << s << " " << policy[0];
+      EXPECT_NEAR(delta.mean, expected, 5.0 * delta.standardError + 1e-4) << "s = " << s << " " << policy[0];
+    }
+  }
+}
+
+// Expected region means for the slab camera: f(cos theta) per pixel centre, averaged per region.
+std::vector<Rgb> slabExpectation(const Scene& scene, int blocks, const std::function<Rgb(float)>& radiance) {
+  const Camera& cam = scene.camera();
+  std::vector<Rgb> out;
+  for (int by = 0; by < blocks; ++by)
+    for (int bx = 0; bx < blocks; ++bx) {
+      Rgb sum(0.0f);
+      int n = 0;
+      for (int y = by * cam.height() / blocks; y < (by + 1) * cam.height() / blocks; ++y)
+        for (int x = bx * cam.width() / blocks; x < (bx + 1) * cam.width() / blocks; ++x) {
+          const Ray r = cam.generate(x + 0.5f, y + 0.5f);
+          sum += radiance(-r.direction.z);
+          ++n;
+        }
+      out.push_back(sum / static_cast<float>(n));
+    }
+  return out;
+}
+
+TEST(ClosedForm, AbsorbingSlabImage) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/slab.json");
+  auto scene = Scene::build(desc);
+  const Film film = test::render(desc, 256);
+  const auto expected = slabExpectation(*scene, 4, [](float cosTheta) { return Rgb(std::exp(-1.0f / cosTheta)); });
+  const Agreement a = compareToExpected(film, 4, 4, expected);
+  EXPECT_TRUE(a.agree) << a.worst;
+  EXPECT_LT(a.maxRelativeDifference, 0.06);
+}
+
+TEST(ClosedForm, EmissionOnlySlab) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/emission-slab.json");
+  auto scene = Scene::build(desc);
+  const Film film = test::render(desc, 256);
+  const Rgb le = blackbody()(1500.0f);
+  EXPECT_NEAR(luminance(le), 1.0f, 0.01f);
+  const auto expected = slabExpectation(*scene, 4, [&](float cosTheta) { return le * (1.0f - std::exp(-1.0f / cosTheta)); });
+  const Agreement a = compareToExpected(film, 4, 4, expected);
+  EXPECT_TRUE(a.agree) << a.worst;
+  EXPECT_LT(a.maxRelativeDifference, 0.03);
+  EXPECT_EQ(film.rejectedSamples(), 0u);
+}
+
+TEST(ClosedForm, WhiteFurnaceReturnsTheEnvironment) {
+  for (const char* g : {"0.6", "-0.7", "0.0"}) {
+    const SceneDesc desc = test::loadScene("assets/scenes/test/furnace.json", {std::string("volumes.0.g=") + g});
+    const Film film = test::render(desc, 128);
+    const std::vector<Rgb> ones(16, Rgb(1.0f));
+    const Agreement a = compareToExpected(film, 4, 4, ones);
+    EXPECT_TRUE(a.agree) << "g = " << g << ": " << a.worst;
+    EXPECT_LT(a.maxRelativeDifference, 0.03) << "g = " << g;
+    EXPECT_EQ(film.rejectedSamples(), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace candela

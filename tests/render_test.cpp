@@ -1,0 +1,108 @@
+// Progressive renderer properties: determinism across thread counts, cancellation, NaN rejection,
+// the statistical agreement helper (it accepts independent renders and catches a small bias), and
+// agreement of the conventional estimator across majorant policies (every policy is unbiased).
+#include "stats.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+namespace candela {
+namespace {
+
+const std::vector<std::string> kSmall = {"camera.resolution=[40,24]"};
+
+TEST(Renderer, SameImageWhateverTheThreadCount) {
+  const SceneDesc desc = test::loadScene("assets/scenes/torch-in-mist.json", kSmall);
+  const Film one = test::render(desc, 3, 1);
+  const Film two = test::render(desc, 3, 2);
+  ASSERT_EQ(one.spp(), 3);
+  EXPECT_EQ(one.sum(), two.sum());
+  EXPECT_EQ(one.sumSquares(), two.sumSquares());
+  // And the same whether the 3 samples came in one pass or three.
+  auto scene = Scene::build(desc);
+  ProgressiveRenderer renderer(scene, RenderOptions{2, 8});
+  Film passes;
+  for (int i = 0; i < 3; ++i) renderer.renderPass(passes, 1);
+  for (size_t i = 0; i < one.sum().size(); ++i) ASSERT_NEAR(passes.sum()[i], one.sum()[i], 1e-5f * (1.0f + one.sum()[i]));
+}
+
+TEST(Renderer, CancelledPassLeavesTheFilmUntouchedAndStopsQuickly) {
+  const SceneDesc desc = test::loadScene("assets/scenes/cloud.json", {"camera.resolution=[320,180]"});
+  auto scene = Scene::build(desc);
+  ProgressiveRenderer renderer(scene, RenderOptions{2, 16});
+  Film film;
+  ASSERT_TRUE(renderer.renderPass(film, 1));
+  const std::vector<float> before = film.sum();
+  std::atomic<bool> cancel{false};
+  std::chrono::steady_clock::time_point cancelledAt;
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    cancelledAt = std::chrono::steady_clock::now();
+    cancel = true;
+  });
+  const bool finished = renderer.renderPass(film, 64, &cancel);
+  const auto returnedAt = std::chrono::steady_clock::now();
+  stopper.join();
+  EXPECT_FALSE(finished);
+  EXPECT_EQ(film.spp(), 1);
+  EXPECT_EQ(film.sum(), before);
+  // Not a timing test of speed: a generous bound that only a pass ignoring the flag would break.
+  EXPECT_LT(std::chrono::duration<double>(returnedAt - cancelledAt).count(), 0.5);
+}
+
+TEST(Film, RejectsAndCountsNonFiniteOrNegativeSamples) {
+  Film pass(2, 1);
+  EXPECT_TRUE(pass.addSample(0, 0, Rgb(1.0f)));
+  EXPECT_FALSE(pass.addSample(0, 0, Rgb(NAN, 0.0f, 0.0f)));
+  EXPECT_FALSE(pass.addSample(1, 0, Rgb(0.0f, INFINITY, 0.0f)));
+  EXPECT_FALSE(pass.addSample(1, 0, Rgb(0.0f, 0.0f, -1.0f)));
+  pass.setPassSpp(2);
+  Film film(2, 1);
+  film.addPass(pass);
+  EXPECT_EQ(film.rejectedSamples(), 3u);
+  EXPECT_FLOAT_EQ(film.mean(0, 0).r, 0.5f);  // rejected samples count as zero, keeping the mean normalised
+  EXPECT_TRUE(isFinite(film.mean(1, 0)));
+}
+
+TEST(Agreement, AcceptsIndependentRendersAndCatchesAThreePercentBias) {
+  const SceneDesc a = test::loadScene("assets/scenes/test/furnace.json", {"render.seed=1"});
+  const SceneDesc b = test::loadScene("assets/scenes/test/furnace.json", {"render.seed=2"});
+  const Film fa = test::render(a, 256), fb = test::render(b, 256);
+  const Agreement same = compareRenders(fa, fb, 4, 4);
+  EXPECT_TRUE(same.agree) << same.worst;
+  SceneDesc brighter = b;
+  brighter.lights[0].intensity = 1.03f;
+  const Agreement biased = compareRenders(fa, test::render(brighter, 256), 4, 4);
+  EXPECT_FALSE(biased.agree) << "a 3% bias went unnoticed: " << biased.worst;
+}
+
+// Every majorant policy is unbiased: the conventional estimator converges to the same image.
+class MajorantPolicyAgreement : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(MajorantPolicyAgreement, GlobalGridAndLooseMajorantsAgree) {
+  const std::string scene = std::string("assets/scenes/") + GetParam() + ".json";
+  const std::vector<std::string> res = {"camera.resolution=[32,18]"};
+  auto with = [&](std::vector<std::string> extra, const char* seed) {
+    extra.insert(extra.begin(), res.begin(), res.end());
+    extra.push_back(std::string("render.seed=") + seed);
+    return test::loadScene(scene, extra);
+  };
+  const int spp = 1024;  // enough to see a 2-3% bias in the brighter regions of these scenes
+  const Film base = test::render(with({"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=8"}, "1"), spp);
+  const Film global = test::render(with({"strategy.majorant.structure=\"global\""}, "2"), spp);
+  const Film fine = test::render(with({"strategy.majorant.cell_size=2"}, "3"), spp);
+  const Film loose = test::render(with({"strategy.majorant.safety_factor=4"}, "4"), spp);
+  for (const Film* f : {&global, &fine, &loose}) {
+    const Agreement a = compareRenders(base, *f, 4, 2);
+    EXPECT_TRUE(a.agree) << GetParam() << ": " << a.worst;
+    EXPECT_EQ(f->rejectedSamples(), 0u);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, MajorantPolicyAgreement, ::testing::Values("god-rays", "cloud", "fire", "torch-in-mist"));
+
+}  // namespace
+}  // namespace candela

@@ -1,0 +1,26 @@
+// Shared helpers for the tests: asset paths, loading scenes with --set style edits, rendering films.
+#pragma once
+
+#include "renderer.h"
+#include "scene.h"
+
+#include <string>
+#include <vector>
+
+namespace candela::test {
+
+inline std::string assetPath(const std::string& relative) { return std::string(CANDELA_SOURCE_DIR) + "/" + relative; }
+
+inline SceneDesc loadScene(const std::string& relative, const std::vector<std::string>& settings = {}) {
+  return loadSceneDesc(assetPath(relative), settings);
+}
+
+inline Film render(const SceneDesc& desc, int spp, int threads = 0) {
+  auto scene = Scene::build(desc);
+  ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
+  Film film;
+  renderer.renderBudget(film, spp, 0.0, std::min(spp, 16));
+  return film;
+}
+
+}  // namespace candela::test
