@@ -133,6 +133,35 @@ TEST(ClosedForm, EmissionOnlySlab) {
   EXPECT_EQ(film.rejectedSamples(), 0u);
 }
 
+TEST(ClosedForm, DiffusePlaneUnderASphereLightWithMis) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/sphere-light.json");
+  auto scene = Scene::build(desc);
+  const Film film = test::render(desc, 512);
+  const Camera& cam = scene->camera();
+  std::vector<Rgb> expected;
+  constexpr int kBlocks = 4;
+  for (int by = 0; by < kBlocks; ++by)
+    for (int bx = 0; bx < kBlocks; ++bx) {
+      double sum = 0.0;
+      int n = 0;
+      for (int y = by * cam.height() / kBlocks; y < (by + 1) * cam.height() / kBlocks; ++y)
+        for (int x = bx * cam.width() / kBlocks; x < (bx + 1) * cam.width() / kBlocks; ++x)
+          for (int sy = 0; sy < 4; ++sy)
+            for (int sx = 0; sx < 4; ++sx) {
+              const Ray r = cam.generate(x + (sx + 0.5f) / 4.0f, y + (sy + 0.5f) / 4.0f);
+              const Vec3 p = r.at(-r.origin.y / r.direction.y);
+              const Vec3 toLight = Vec3(0.0f, 2.0f, 0.0f) - p;
+              const double d2 = glm::dot(toLight, toLight);
+              sum += 0.5 * (0.25 / d2) * (toLight.y / std::sqrt(d2));
+              ++n;
+            }
+      expected.push_back(Rgb(static_cast<float>(sum / n)));
+    }
+  const Agreement a = compareToExpected(film, kBlocks, kBlocks, expected);
+  EXPECT_TRUE(a.agree) << a.worst;
+  EXPECT_LT(a.maxRelativeDifference, 0.03);
+}
+
 TEST(ClosedForm, WhiteFurnaceReturnsTheEnvironment) {
   for (const char* g : {"0.6", "-0.7", "0.0"}) {
     const SceneDesc desc = test::loadScene("assets/scenes/test/furnace.json", {std::string("volumes.0.g=") + g});
