@@ -114,16 +114,16 @@ float Light::power(float sceneRadius) const {
   return 0.0f;
 }
 
-LightSampler::LightSampler(const std::vector<Light>& lights, float sceneRadius) {
-  if (lights.empty()) return;
-  std::vector<float> power(lights.size());
+LightSampler::LightSampler(const std::vector<float>& powers) {
+  if (powers.empty()) return;
+  std::vector<float> power(powers.size());
   float total = 0.0f;
-  for (size_t i = 0; i < lights.size(); ++i) total += power[i] = std::max(0.0f, lights[i].power(sceneRadius));
+  for (size_t i = 0; i < powers.size(); ++i) total += power[i] = std::max(0.0f, std::isfinite(powers[i]) ? powers[i] : 0.0f);
   if (!(total > 0.0f)) return;
-  pmf_.resize(lights.size());
-  cdf_.resize(lights.size());
+  pmf_.resize(powers.size());
+  cdf_.resize(powers.size());
   float acc = 0.0f;
-  for (size_t i = 0; i < lights.size(); ++i) {
+  for (size_t i = 0; i < powers.size(); ++i) {
     pmf_[i] = power[i] / total;
     acc += pmf_[i];
     cdf_[i] = acc;
@@ -134,7 +134,6 @@ LightSampler::LightSampler(const std::vector<Light>& lights, float sceneRadius) 
 int LightSampler::sample(float u, float& pmf) const {
   const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
   int index = static_cast<int>(std::min<std::ptrdiff_t>(it - cdf_.begin(), static_cast<std::ptrdiff_t>(cdf_.size()) - 1));
-  while (pmf_[static_cast<size_t>(index)] == 0.0f && index > 0) --index;
   pmf = pmf_[static_cast<size_t>(index)];
   return index;
 }

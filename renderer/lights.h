@@ -40,11 +40,12 @@ class Light {
   float cosOuter_ = 0.0f, cosInner_ = 1.0f;
 };
 
-// Picks a light with probability proportional to its power (a discrete CDF).
+// Picks a light with probability proportional to its power (a discrete CDF). Entries are the
+// scene's lights followed by its emissive volumes (when they are sampled as lights).
 class LightSampler {
  public:
   LightSampler() = default;
-  LightSampler(const std::vector<Light>& lights, float sceneRadius);
+  explicit LightSampler(const std::vector<float>& powers);
   bool empty() const { return cdf_.empty(); }
   int sample(float u, float& pmf) const;
   float pmf(int index) const { return pmf_[static_cast<size_t>(index)]; }

@@ -7,37 +7,51 @@
 
 namespace candela {
 
-MajorantGrid::MajorantGrid(const VoxelGrid& density, MajorantStructure structure, int cellSize) {
+CoarseGrid CoarseGrid::over(const VoxelGrid& density, int cellSize) {
+  CoarseGrid g;
   const IndexBox box = density.activeBox();
-  if (box.empty()) return;
+  if (box.empty()) return g;
   // Trilinear lookups are non-zero strictly inside (min - 1, max + 1): that is the domain.
-  origin_ = Vec3(box.min) - 1.0f;
+  g.origin = Vec3(box.min) - 1.0f;
   const Vec3 extent = Vec3(box.max - box.min) + 2.0f;
-  if (structure == MajorantStructure::Global) {
-    res_ = glm::ivec3(1);
-    cell_ = extent;
+  if (cellSize <= 0) {
+    g.res = glm::ivec3(1);
+    g.cellExtent = extent;
   } else {
-    const float c = static_cast<float>(std::max(1, cellSize));
-    res_ = glm::max(glm::ivec3(glm::ceil(extent / c)), glm::ivec3(1));
-    cell_ = Vec3(c);
+    const float c = static_cast<float>(cellSize);
+    g.res = glm::max(glm::ivec3(glm::ceil(extent / c)), glm::ivec3(1));
+    g.cellExtent = Vec3(c);
   }
-  cells_.assign(static_cast<size_t>(res_.x) * res_.y * res_.z, 0.0f);
+  return g;
+}
 
+MajorantGrid::MajorantGrid(const VoxelGrid& density, MajorantStructure structure, int cellSize) {
+  layout_ = CoarseGrid::over(density, structure == MajorantStructure::Global ? 0 : std::max(1, cellSize));
+  if (layout_.empty()) return;
+  cells_ = footprintMaxima(layout_, density.activeBox(), [&density] {
+    return [sampler = density.sampler()](int x, int y, int z) { return sampler.voxel(x, y, z); };
+  });
+}
+
+std::vector<float> footprintMaxima(const CoarseGrid& layout, const IndexBox& box, const VoxelValueFactory& values) {
+  std::vector<float> cells(layout.cellCount(), 0.0f);
+  if (cells.empty() || box.empty()) return cells;
   // A lookup at p in a cell reads voxels floor(p) and floor(p) + 1, so a cell [lo, hi] needs voxels
-  // lo .. hi + 1; we pad one more on each side (METHOD.md s.1). Each voxel updates every cell whose
-  // padded range holds it. Slabs along z run in parallel; each writes a private copy, merged after.
+  // lo .. hi + 1; we pad one more on each side. Each voxel updates every cell whose padded range
+  // holds it. Slabs along z run in parallel; each writes a private copy, merged after.
   const glm::ivec3 vMin = box.min - 2, vMax = box.max + 2;
   const int slabs = std::max(1, std::min(16, vMax.z - vMin.z + 1));
-  std::vector<std::vector<float>> partial(static_cast<size_t>(slabs), std::vector<float>(cells_.size(), 0.0f));
+  std::vector<std::vector<float>> partial(static_cast<size_t>(slabs), std::vector<float>(cells.size(), 0.0f));
   auto cellRange = [&](int v, int axis, int& k0, int& k1) {
-    const float rel = static_cast<float>(v) - origin_[axis];
-    k0 = std::max(0, static_cast<int>(std::ceil((rel - 2.0f) / cell_[axis])) - 1);
-    k1 = std::min(res_[axis] - 1, static_cast<int>(std::floor((rel + 1.0f) / cell_[axis])));
+    const float rel = static_cast<float>(v) - layout.origin[axis];
+    const float c = layout.cellExtent[axis];
+    k0 = std::max(0, static_cast<int>(std::ceil((rel - 2.0f) / c)) - 1);
+    k1 = std::min(layout.res[axis] - 1, static_cast<int>(std::floor((rel + 1.0f) / c)));
     // Keep only cells whose padded voxel range [lo - 1, hi + 2] really contains v.
-    while (k0 <= k1 && origin_[axis] + (k0 + 1) * cell_[axis] + 2.0f < static_cast<float>(v)) ++k0;
+    while (k0 <= k1 && layout.origin[axis] + (k0 + 1) * c + 2.0f < static_cast<float>(v)) ++k0;
   };
   tbb::parallel_for(0, slabs, [&](int s) {
-    auto sampler = density.sampler();
+    const auto value = values();
     std::vector<float>& out = partial[static_cast<size_t>(s)];
     const int depth = vMax.z - vMin.z + 1;
     const int z0 = vMin.z + depth * s / slabs, z1 = vMin.z + depth * (s + 1) / slabs;
@@ -48,14 +62,14 @@ MajorantGrid::MajorantGrid(const VoxelGrid& density, MajorantStructure structure
         int ky0, ky1;
         cellRange(y, 1, ky0, ky1);
         for (int x = vMin.x; x <= vMax.x; ++x) {
-          const float v = sampler.voxel(x, y, z);
+          const float v = value(x, y, z);
           if (!(v > 0.0f)) continue;
           int kx0, kx1;
           cellRange(x, 0, kx0, kx1);
           for (int kz = kz0; kz <= kz1; ++kz)
             for (int ky = ky0; ky <= ky1; ++ky)
               for (int kx = kx0; kx <= kx1; ++kx) {
-                float& m = out[static_cast<size_t>(cellIndex(kx, ky, kz))];
+                float& m = out[static_cast<size_t>(layout.cellIndex(kx, ky, kz))];
                 m = std::max(m, v);
               }
         }
@@ -63,15 +77,16 @@ MajorantGrid::MajorantGrid(const VoxelGrid& density, MajorantStructure structure
     }
   });
   for (const auto& p : partial)
-    for (size_t i = 0; i < cells_.size(); ++i) cells_[i] = std::max(cells_[i], p[i]);
+    for (size_t i = 0; i < cells.size(); ++i) cells[i] = std::max(cells[i], p[i]);
+  return cells;
 }
 
-MajorantDda::MajorantDda(const MajorantGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax) {
+MajorantDda::MajorantDda(const CoarseGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax) {
   if (grid.empty()) return;
-  res_ = grid.resolution();
+  res_ = grid.res;
   // Work in cell coordinates: c = (p - origin) / cellExtent.
-  const Vec3 co = (o - grid.origin()) / grid.cellExtent();
-  const Vec3 cd = d / grid.cellExtent();
+  const Vec3 co = (o - grid.origin) / grid.cellExtent;
+  const Vec3 cd = d / grid.cellExtent;
   float t0 = tMin, t1 = tMax;
   for (int a = 0; a < 3; ++a) {
     if (cd[a] == 0.0f) {

@@ -8,9 +8,34 @@
 #include "settings.h"
 #include "voxel_grid.h"
 
+#include <functional>
 #include <vector>
 
 namespace candela {
+
+// The layout of a coarse grid over a density grid's index space: cells of `cellExtent` index units
+// from `origin`. Shared by the majorant grid and the emission-energy grid, and walked by the DDA.
+struct CoarseGrid {
+  Vec3 origin{0.0f};
+  Vec3 cellExtent{1.0f};
+  glm::ivec3 res{0};
+  bool empty() const { return res.x <= 0 || res.y <= 0 || res.z <= 0; }
+  size_t cellCount() const { return empty() ? 0 : static_cast<size_t>(res.x) * res.y * res.z; }
+  int cellIndex(int x, int y, int z) const { return (z * res.y + y) * res.x + x; }
+  glm::ivec3 cellCoords(int index) const { return {index % res.x, (index / res.x) % res.y, index / (res.x * res.y)}; }
+  Vec3 domainMax() const { return origin + cellExtent * Vec3(res); }
+  // The layout covering a density grid's trilinear support (active box padded by one voxel) with
+  // cells of `cellSize` voxels, or one cell when cellSize <= 0.
+  static CoarseGrid over(const VoxelGrid& density, int cellSize);
+};
+
+// Per-voxel values for footprintMaxima(): the factory makes one callable per worker thread (each
+// holding its own accessor caches).
+using VoxelValueFactory = std::function<std::function<float(int, int, int)>()>;
+
+// For every cell of `layout`, the largest voxel value any trilinear lookup inside the cell can read
+// (its footprint padded by one voxel, METHOD.md s.1). Voxels outside `box` padded by 2 are skipped.
+std::vector<float> footprintMaxima(const CoarseGrid& layout, const IndexBox& box, const VoxelValueFactory& values);
 
 class MajorantGrid {
  public:
@@ -20,19 +45,18 @@ class MajorantGrid {
   MajorantGrid(const VoxelGrid& density, MajorantStructure structure, int cellSize);
 
   bool empty() const { return cells_.empty(); }
-  const glm::ivec3& resolution() const { return res_; }
-  const Vec3& origin() const { return origin_; }      // index-space lower corner of the domain
-  const Vec3& cellExtent() const { return cell_; }    // index-space size of one cell
-  Vec3 domainMax() const { return origin_ + cell_ * Vec3(res_); }
-  int cellIndex(int x, int y, int z) const { return (z * res_.y + y) * res_.x + x; }
+  const CoarseGrid& layout() const { return layout_; }
+  const glm::ivec3& resolution() const { return layout_.res; }
+  const Vec3& origin() const { return layout_.origin; }      // index-space lower corner of the domain
+  const Vec3& cellExtent() const { return layout_.cellExtent; }  // index-space size of one cell
+  Vec3 domainMax() const { return layout_.domainMax(); }
+  int cellIndex(int x, int y, int z) const { return layout_.cellIndex(x, y, z); }
   float maxDensity(int index) const { return cells_[static_cast<size_t>(index)]; }
   const std::vector<float>& maxDensities() const { return cells_; }
   size_t cellCount() const { return cells_.size(); }
 
  private:
-  Vec3 origin_{0.0f};
-  Vec3 cell_{1.0f};
-  glm::ivec3 res_{0};
+  CoarseGrid layout_;
   std::vector<float> cells_;
 };
 
@@ -41,7 +65,9 @@ class MajorantGrid {
 class MajorantDda {
  public:
   MajorantDda() = default;
-  MajorantDda(const MajorantGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax);
+  MajorantDda(const CoarseGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax);
+  MajorantDda(const MajorantGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax)
+      : MajorantDda(grid.layout(), o, d, tMin, tMax) {}
   // Next segment with t0 < t1; false when the ray has left the domain or passed tMax.
   bool next(float& t0, float& t1, int& cell);
 

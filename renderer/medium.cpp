@@ -27,7 +27,8 @@ Medium::Medium(const VolumeDesc& desc, VoxelGrid density, VoxelGrid temperature,
     auxFromDensityIndex_ = glm::inverse(aux_.worldFromIndex()) * density_.worldFromIndex();
     auxSameIndex_ = auxFromDensityIndex_ == Mat4(1.0f);
   }
-  applyPolicy(MajorantPolicy{});
+  voxelSize_ = std::cbrt(std::abs(glm::determinant(glm::mat3(worldFromIndex_))));
+  applyStrategy(StrategySettings{});
 }
 
 void Medium::worldBounds(Vec3& lo, Vec3& hi) const {
@@ -43,17 +44,41 @@ void Medium::worldBounds(Vec3& lo, Vec3& hi) const {
   }
 }
 
-void Medium::applyPolicy(const MajorantPolicy& policy) {
+void Medium::applyStrategy(const StrategySettings& strategy) {
+  const MajorantPolicy& policy = strategy.majorant;
   const int cellSize = policy.structure == MajorantStructure::Grid ? policy.cell_size : 0;
   if (majorant_.empty() || builtStructure_ != policy.structure || builtCellSize_ != cellSize) {
     majorant_ = MajorantGrid(density_, policy.structure, policy.cell_size);
     builtStructure_ = policy.structure;
     builtCellSize_ = cellSize;
+    emissionMaxima_.clear();
   }
-  // Round up by a few ulps so float rounding in the trilinear lerp can never exceed the majorant.
+  const bool emissionTerm = policy.emission_term && policy.emission_weight > 0.0f && emissive_;
+  if (emissionTerm && emissionMaxima_.empty()) {
+    emissionMaxima_ = footprintMaxima(majorant_.layout(), density_.activeBox(), [this] {
+      return [sampler = Sampler(*this), density = density_.sampler()](int x, int y, int z) {
+        const float d = density.voxel(x, y, z);
+        return d > 0.0f ? d * luminance(sampler.emission(Vec3(x, y, z))) : 0.0f;
+      };
+    });
+  }
+  if (strategy.emission.light_sampling && emissive_) {
+    if (!emissionLight_ || emissionLight_->cellSize() != strategy.emission.grid_cell_size)
+      emissionLight_ = std::make_unique<EmissionLight>(*this, strategy.emission.grid_cell_size);
+  } else {
+    emissionLight_.reset();
+  }
+  // mu_bar = max(maj(mu_t), min(k * maj(mu_a lum(Le)), c / voxel_size)); rounded up by a few ulps so
+  // float rounding in the trilinear lerp can never exceed maj(mu_t).
   const float scale = desc_.sigma_t_scale * policy.safety_factor * (1.0f + 4e-7f);
+  const float emissionScale = policy.emission_weight * desc_.sigma_t_scale * (1.0f - albedoAverage_);
+  const float cap = policy.emission_cap > 0.0f ? policy.emission_cap / voxelSize_ : kInfinity;
   cellMajorant_.resize(majorant_.cellCount());
-  for (size_t i = 0; i < cellMajorant_.size(); ++i) cellMajorant_[i] = majorant_.maxDensities()[i] * scale;
+  for (size_t i = 0; i < cellMajorant_.size(); ++i) {
+    float muBar = majorant_.maxDensities()[i] * scale;
+    if (emissionTerm) muBar = std::max(muBar, std::min(emissionMaxima_[i] * emissionScale, cap));
+    cellMajorant_[i] = muBar;
+  }
 }
 
 Medium::Sampler::Sampler(const Medium& m)

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "blackbody.h"
+#include "emission_light.h"
 #include "majorant.h"
 #include "scene_desc.h"
 #include "voxel_grid.h"
@@ -32,11 +33,19 @@ class Medium {
   // World-space bounds of the majorant domain (for framing and light sizes).
   void worldBounds(Vec3& lo, Vec3& hi) const;
 
-  // Rebuilds the majorant grid when its structure changed, and the per-cell majorants always
-  // (cheap: one multiply per cell).
-  void applyPolicy(const MajorantPolicy& policy);
-  // Majorant of mu_t in a cell of the majorant grid (world units).
+  // Applies the strategy, rebuilding only what depends on what changed: the majorant grid (its
+  // structure or cell size), the emission maxima (the majorant layout), the emission light (its
+  // grid cell size, or light sampling turned on); the per-cell mu_bar is recomputed always (cheap).
+  void applyStrategy(const StrategySettings& strategy);
+  // The combined majorant mu_bar of a cell of the majorant grid (world units).
   float cellMajorant(int cell) const { return cellMajorant_[static_cast<size_t>(cell)]; }
+  // Geometric-mean voxel edge in world units (the emission cap's c / voxel_size).
+  float voxelSize() const { return voxelSize_; }
+  // The emissive volume as a light (null unless emissive and light sampling is on).
+  const EmissionLight* emissionLight() const { return emissionLight_.get(); }
+  // Position of this medium in the scene's list (for per-medium weights in the hot loop).
+  int index() const { return index_; }
+  void setIndex(int index) { index_ = index; }
 
   // Per-thread lookups with accessor caches. Positions are in this medium's density index space.
   class Sampler {
@@ -64,7 +73,11 @@ class Medium {
   MajorantGrid majorant_;
   MajorantStructure builtStructure_ = MajorantStructure::Grid;
   int builtCellSize_ = -1;
+  std::vector<float> emissionMaxima_;  // per majorant cell: max of density * lum(Le) over the footprint
+  std::unique_ptr<EmissionLight> emissionLight_;
   std::vector<float> cellMajorant_;
+  float voxelSize_ = 1.0f;
+  int index_ = 0;
 };
 
 // The volume placement as a matrix: translate * rotateZ * rotateY * rotateX * scale.

@@ -69,7 +69,8 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     auto medium = std::make_unique<Medium>(v, grids[0].grid, temperatureGrid, emissionGrid);
     if (medium->majorantGrid().empty() && warnings)
       warnings->push_back(path + ": " + field + ": grid \"" + density + "\" has no active voxels; the volume is empty");
-    medium->applyPolicy(desc.strategy.majorant);
+    medium->setIndex(static_cast<int>(i));
+    medium->applyStrategy(desc.strategy);
     scene->hasEmissiveMedia_ |= medium->emissive();
     scene->media_.push_back(std::move(medium));
   }
@@ -98,14 +99,28 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     scene->radius_ = std::max(1e-3f, glm::length(desc.camera.look_at - desc.camera.position));
   }
   for (const auto& l : desc.lights) scene->lights_.emplace_back(l);
-  scene->lightSampler_ = LightSampler(scene->lights_, scene->radius_);
+  scene->buildLightSampler();
   scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
   return scene;
 }
 
 void Scene::setStrategy(const StrategySettings& strategy) {
   desc_.strategy = strategy;
-  for (auto& m : media_) m->applyPolicy(strategy.majorant);
+  for (auto& m : media_) m->applyStrategy(strategy);
+  buildLightSampler();
+}
+
+void Scene::buildLightSampler() {
+  // Lights and emissive volumes compete by power (talk 2.1: emissive volumes are lights).
+  std::vector<float> powers;
+  for (const Light& l : lights_) powers.push_back(l.power(radius_));
+  volumeLights_.clear();
+  for (const auto& m : media_)
+    if (const EmissionLight* e = m->emissionLight(); e && !e->empty()) {
+      volumeLights_.push_back(e);
+      powers.push_back(e->power());
+    }
+  lightSampler_ = LightSampler(powers);
 }
 
 }  // namespace candela

@@ -40,6 +40,8 @@ class Scene {
   const std::vector<std::unique_ptr<Medium>>& mediaOwned() const { return media_; }
   const std::vector<Light>& lights() const { return lights_; }
   const LightSampler& lightSampler() const { return lightSampler_; }
+  // Emissive volumes sampled as lights; light-sampler entry lights().size() + i is volumeLights()[i].
+  const std::vector<const EmissionLight*>& volumeLights() const { return volumeLights_; }
   const Surfaces& surfaces() const { return *surfaces_; }
   const StrategySettings& strategy() const { return desc_.strategy; }
   const RenderSettings& render() const { return desc_.render; }
@@ -58,6 +60,8 @@ class Scene {
   MediaView mediaView_;
   std::vector<Light> lights_;
   LightSampler lightSampler_;
+  std::vector<const EmissionLight*> volumeLights_;
+  void buildLightSampler();
   std::unique_ptr<Surfaces> surfaces_;
   bool hasEmissiveMedia_ = false;
   float radius_ = 1.0f;

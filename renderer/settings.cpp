@@ -3,7 +3,7 @@
 namespace candela {
 
 const std::vector<std::string>& strategyPresetNames() {
-  static const std::vector<std::string> names{"conventional"};
+  static const std::vector<std::string> names{"conventional", "emission"};
   return names;
 }
 
@@ -11,6 +11,13 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
   StrategySettings s;
   s.preset = name;
   if (name == "conventional") return s;  // METHOD.md section 2, "conventional": the baseline
+  if (name == "emission") {
+    // Talk s.2.1: emission-aware majorant + emission at every collision + NEE toward emissive volumes.
+    s.majorant.emission_term = true;
+    s.emission.gather_every_collision = true;
+    s.emission.light_sampling = true;
+    return s;
+  }
   std::string known;
   for (const auto& n : strategyPresetNames()) known += (known.empty() ? "" : ", ") + n;
   throw InputError(origin + ": expected a strategy preset (" + known + "), got \"" + name + "\"");

@@ -23,28 +23,55 @@ struct EnumNames<MajorantStructure> {
 };
 
 // METHOD.md section 1: the majorant policy.
+// mu_bar = max(maj(mu_t), min(k * maj(mu_a * lum(Le)), c / voxel_size)) when the emission term is on
+// (talk s.2.1), else maj(mu_t). It never drops below maj(mu_t), so mu_n >= 0 always. The emission
+// term is a sampling choice, not a bound: any mu_bar >= mu_t keeps every estimator unbiased.
 struct MajorantPolicy {
   MajorantStructure structure = MajorantStructure::Grid;
   int cell_size = 8;             // voxels per majorant cell along each axis (grid structure)
+  bool emission_term = false;    // raise mu_bar where mu_a * Le is large
+  float emission_weight = 1.0f;  // k: collisions per unit length per unit of mu_a * lum(Le)
+  float emission_cap = 1.0f;     // c: emission-driven rate capped at c collisions per voxel; 0 = no cap
   float safety_factor = 1.0f;    // multiplies every majorant; >= 1
 
   template <class V>
   void visit(V& v) {
     v.field("structure", structure, "global: one majorant for the whole volume; grid: one per coarse cell, walked by a 3D DDA");
     v.field("cell_size", cell_size, "Voxels per majorant cell along each axis (grid structure). Smaller is tighter but more DDA steps", Range{1, 4096});
+    v.field("emission_term", emission_term, "Raise the majorant where emission is bright, so collisions (and emission gathering) concentrate there (talk 2.1)");
+    v.field("emission_weight", emission_weight, "k: converts mu_a * lum(Le) into a collision rate; 0 turns the emission term off", Range{0.0, 1e9});
+    v.field("emission_cap", emission_cap, "c: the emission-driven rate is capped at c / voxel size (collisions per voxel); 0 = no cap", Range{0.0, 1e6});
     v.field("safety_factor", safety_factor, "Multiplies every majorant; keep 1 unless lookups can exceed the stored maxima", Range{1.0, 100.0});
+  }
+};
+
+// Emission sampling (talk s.2.1; METHOD.md s.2 and s.3).
+struct EmissionSettings {
+  bool gather_every_collision = false;  // P_a = P_n = 1: add mu_a Le / mu_bar at every collision
+  bool light_sampling = false;          // emissive volumes are lights: NEE via the energy grid + MIS
+  int grid_cell_size = 4;               // voxels per cell of the emission-energy-distribution grid
+
+  template <class V>
+  void visit(V& v) {
+    v.field("gather_every_collision", gather_every_collision,
+            "Gather emission at every tentative collision with absorption as a weight, instead of only at absorption events");
+    v.field("light_sampling", light_sampling,
+            "Treat emissive volumes as light sources: next-event estimation toward them, MIS with phase/BSDF sampling");
+    v.field("grid_cell_size", grid_cell_size, "Voxels per cell of the emission-energy grid used to sample emissive volumes", Range{1, 4096});
   }
 };
 
 struct StrategySettings {
   std::string preset = "conventional";
   MajorantPolicy majorant;
+  EmissionSettings emission;
   int russian_roulette_depth = 3;  // scattering events before Russian roulette may end a path
 
   template <class V>
   void visit(V& v) {
-    v.field("preset", preset, "Named starting point for the settings below (conventional)");
+    v.field("preset", preset, "Named starting point for the settings below (conventional, emission)");
     v.object("majorant", majorant, "How the majorant (the collision rate of null-collision tracking) is built");
+    v.object("emission", emission, "Emission sampling: gathering at every collision and emissive volumes as lights");
     v.field("russian_roulette_depth", russian_roulette_depth, "Scattering events before Russian roulette may end a path (unbiased)", Range{0, 100000});
   }
 };

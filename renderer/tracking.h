@@ -165,4 +165,23 @@ inline float ratioTrackingTransmittance(const MediaView& view, const Ray& ray, f
   return transmittance;
 }
 
+// Algorithm 1 of the talk: the emission integral along a ray by ratio tracking, where only the
+// emission is needed (NEE toward emissive volumes, probe learning): L += w mu_a Le / mu_bar,
+// w *= mu_n / mu_bar at every tentative collision. It includes the transmittance of every medium
+// in between. Roulette keeps long walks cheap and the estimate unbiased.
+inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
+  Rgb radiance(0.0f);
+  float weight = 1.0f;
+  trackCollisions(view, ray, tMax, rng, [&](const Collision& c) {
+    radiance += c.emissionSource() * (weight / c.muBar);
+    weight *= std::max(0.0f, 1.0f - c.sigmaTTotal / c.muBar);
+    if (weight < 0.1f) {
+      if (rng.uniform() >= weight * 10.0f) return false;
+      weight = 0.1f;
+    }
+    return weight > 0.0f;
+  });
+  return radiance;
+}
+
 }  // namespace candela
