@@ -1,5 +1,6 @@
 #include "stats.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -50,13 +51,17 @@ namespace {
 
 Agreement compare(const std::vector<RegionEstimate>& a, const std::vector<Rgb>& b, const std::vector<Rgb>* seB, double alpha) {
   Agreement out;
+  double brightest = 0.0;
+  for (size_t r = 0; r < a.size(); ++r)
+    for (int c = 0; c < 3; ++c) brightest = std::max({brightest, std::abs(static_cast<double>(a[r].mean[c])), std::abs(static_cast<double>(b[r][c]))});
+  const double floor = 1e-3 * brightest;
   out.tests = static_cast<int>(a.size()) * 3;
   out.threshold = normalTwoSidedThreshold(alpha / out.tests);
   for (size_t r = 0; r < a.size(); ++r)
     for (int c = 0; c < 3; ++c) {
       const double diff = static_cast<double>(a[r].mean[c]) - b[r][c];
-      const double se = std::hypot(static_cast<double>(a[r].standardError[c]), seB ? static_cast<double>((*seB)[r][c]) : 0.0);
-      const double z = se > 0.0 ? std::abs(diff) / se : (std::abs(diff) > 1e-7 * std::max(1.0, static_cast<double>(std::abs(b[r][c]))) ? 1e30 : 0.0);
+      const double se = std::hypot(std::hypot(static_cast<double>(a[r].standardError[c]), seB ? static_cast<double>((*seB)[r][c]) : 0.0), floor);
+      const double z = se > 0.0 ? std::abs(diff) / se : (std::abs(diff) > 0.0 ? 1e30 : 0.0);
       const double scale = std::max(std::abs(static_cast<double>(a[r].mean[c])), std::abs(static_cast<double>(b[r][c])));
       if (scale > 0.0) out.maxRelativeDifference = std::max(out.maxRelativeDifference, std::abs(diff) / scale);
       if (z > out.maxAbsZ) {
