@@ -2,6 +2,7 @@
 //   candela-cli render SCENE.json -o OUT.exr|OUT.png [--spp N | --time S] [--seed N] [--threads N]
 //                      [--strategy PRESET] [--set key=value ...]
 //   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
+//                     [--sweep KEY=V1,V2,...]
 //   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
 #include "convergence.h"
 #include "procedural.h"
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <fstream>
 #include <sstream>
 
 using namespace candela;
@@ -77,7 +79,23 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
 }
 
 int bench(const std::string& scenePath, const std::string& strategiesText, const std::string& timesText, const std::string& refPath,
-          int refSpp, const std::string& refStrategy, const std::string& outDir, int threads, const std::vector<std::string>& sets) {
+          int refSpp, const std::string& refStrategy, const std::string& outDir, int threads, const std::vector<std::string>& sets,
+          const std::string& sweep) {
+  // --sweep KEY=V1,V2,...: every strategy is benched once per value (as --set KEY=V).
+  std::string sweepKey;
+  std::vector<std::string> sweepValues{""};
+  if (!sweep.empty()) {
+    const auto eq = sweep.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError("--sweep: expected KEY=V1,V2,..., got \"" + sweep + "\"");
+    sweepKey = sweep.substr(0, eq);
+    sweepValues = splitList(sweep.substr(eq + 1));
+    if (sweepValues.empty()) throw InputError("--sweep: expected at least one value after '='");
+    for (const auto& v : sweepValues) {
+      char* end = nullptr;
+      std::strtod(v.c_str(), &end);
+      if (*end != '\0') throw InputError("--sweep: expected numeric values, got \"" + v + "\"");
+    }
+  }
   const auto strategies = splitList(strategiesText);
   std::vector<double> times;
   for (const auto& t : splitList(timesText)) {
@@ -112,8 +130,16 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
   }
 
   std::vector<ConvergencePoint> points;
+  std::vector<SweepPoint> sweepPoints;
+  for (const auto& value : sweepValues)
   for (const auto& strategy : strategies) {
-    SceneDesc desc = sceneWith(scenePath, strategy, sets);
+    std::vector<std::string> runSets = sets;
+    std::string label = strategy;
+    if (!sweepKey.empty()) {
+      runSets.push_back(sweepKey + "=" + value);
+      label = strategy + " " + sweepKey.substr(sweepKey.rfind('.') + 1) + "=" + value;
+    }
+    SceneDesc desc = sceneWith(scenePath, strategy, runSets);
     auto scene = buildScene(desc);
     if (reference.width != scene->camera().width() || reference.height != scene->camera().height())
       throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
@@ -122,7 +148,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
       ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
       Film film;
       ConvergencePoint p;
-      p.strategy = strategy;
+      p.strategy = label;
       p.budgetSeconds = budget;
       p.seconds = renderer.renderBudget(film, 0, budget, 1);
       p.spp = film.spp();
@@ -131,9 +157,11 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
       p.mse = e.mse;
       p.relmse = e.relmse;
       points.push_back(p);
-      std::printf("%-14s budget %7.2f s  time %7.2f s  spp %6d  mse %.4g  relmse %.4g\n", strategy.c_str(), budget, p.seconds, p.spp,
+      std::printf("%-14s budget %7.2f s  time %7.2f s  spp %6d  mse %.4g  relmse %.4g\n", label.c_str(), budget, p.seconds, p.spp,
                   p.mse, p.relmse);
       std::fflush(stdout);
+      if (budget == times.back() && !sweepKey.empty())
+        sweepPoints.push_back({strategy, std::stod(value), 1.0 / (p.relmse * p.seconds)});
     }
   }
   const std::string csv = (std::filesystem::path(outDir) / "convergence.csv").string();
@@ -142,13 +170,24 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
   comment << "scene: " << scenePath << "; threads: " << (threads > 0 ? std::to_string(threads) : "all") << "; " << referenceNote;
   writeConvergenceCsv(csv, points, comment.str());
   writeConvergenceSvg(svg, points, std::filesystem::path(scenePath).stem().string() + ": error versus time");
+  if (!sweepKey.empty()) {
+    const std::string sweepCsv = (std::filesystem::path(outDir) / "sweep.csv").string();
+    const std::string sweepSvg = (std::filesystem::path(outDir) / "sweep.svg").string();
+    std::ofstream out(sweepCsv);
+    out << "# efficiency = 1 / (relmse x time_s) at the largest budget; " << kRelMseFormula << "\n";
+    out << "strategy," << sweepKey << ",efficiency\n";
+    for (const auto& p : sweepPoints) out << p.strategy << ',' << p.value << ',' << p.efficiency << '\n';
+    writeSweepSvg(sweepSvg, sweepPoints, std::filesystem::path(scenePath).stem().string() + ": efficiency versus " + sweepKey, sweepKey);
+    std::printf("wrote %s and %s\n", sweepCsv.c_str(), sweepSvg.c_str());
+  }
   std::printf("\nefficiency = 1 / (relMSE x time) at the largest budget (%.2f s):\n", times.back());
   double base = 0.0;
+  std::string baseLabel;
   for (const auto& p : points) {
     if (p.budgetSeconds != times.back()) continue;
     const double eff = 1.0 / (p.relmse * p.seconds);
-    if (base == 0.0) base = eff;
-    std::printf("  %-14s %10.4g   (x%.2f vs %s)\n", p.strategy.c_str(), eff, eff / base, strategies.front().c_str());
+    if (base == 0.0) base = eff, baseLabel = p.strategy;
+    std::printf("  %-28s %10.4g   (x%.2f vs %s)\n", p.strategy.c_str(), eff, eff / base, baseLabel.c_str());
   }
   std::printf("wrote %s and %s\n", csv.c_str(), svg.c_str());
   return 0;
@@ -189,6 +228,8 @@ int main(int argc, char** argv) {
   b->add_option("-o,--output", out, "Output directory")->required();
   b->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
   b->add_option("--set", sets, "Edit any scene or strategy parameter by JSON path");
+  std::string sweep;
+  b->add_option("--sweep", sweep, "KEY=V1,V2,...: bench every strategy once per value; writes sweep.csv and sweep.svg (efficiency vs value)");
 
   std::string genType;
   GeneratorDesc gen;
@@ -205,7 +246,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (r->parsed()) return render(scenePath, out, spp, seconds, seed, threads, preset, sets);
-    if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets);
+    if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets, sweep);
     if (g->parsed()) {
       gen.type = genType;
       if (size.size() == 3) gen.size = Vec3(size[0], size[1], size[2]);

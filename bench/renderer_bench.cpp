@@ -47,7 +47,7 @@ void BM_TrilinearLookupCoherent(benchmark::State& state) {
   for (auto _ : state) {
     t += 0.37f;
     if (t > 1000.0f) t = 0.0f;
-    sum += sampler.trilinear(a + (b - a) * Vec3(t / 1000.0f, 0.5f, 0.5f + 0.3f * t / 1000.0f));
+    sum += sampler.trilinear(a + (b - a) * Vec3(t / 1000.0f, 0.43f + 0.1f * t / 1000.0f, 0.5f + 0.3f * t / 1000.0f));
   }
   benchmark::DoNotOptimize(sum);
   state.SetItemsProcessed(state.iterations());
@@ -82,6 +82,39 @@ void BM_CameraPaths(benchmark::State& state) {
   state.SetLabel("torch-in-mist conventional, paths/s");
 }
 BENCHMARK(BM_CameraPaths)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Live-edit cost of the majorant policy on torch-in-mist (both media): what a slider change costs.
+//   k or cap or safety factor: per-cell mu_bar only; cell size: majorant grid + emission maxima;
+//   emission grid cell size: the emission-energy grid.
+void BM_PolicyRebuild(benchmark::State& state) {
+  auto scene = Scene::build(loadSceneDesc(scenePath("torch-in-mist.json"), {"strategy.preset=\"emission\""}));
+  StrategySettings a = scene->strategy(), b = a;
+  switch (state.range(0)) {
+    case 0: b.majorant.emission_weight = a.majorant.emission_weight * 2.0f; state.SetLabel("emission weight k"); break;
+    case 1: b.majorant.cell_size = 16; state.SetLabel("majorant cell size 8 <-> 16"); break;
+    case 2: b.emission.grid_cell_size = 8; state.SetLabel("emission grid cell 4 <-> 8"); break;
+    default: b.majorant.structure = MajorantStructure::Global; state.SetLabel("grid <-> global"); break;
+  }
+  bool flip = false;
+  for (auto _ : state) {
+    scene->setStrategy(flip ? a : b);
+    flip = !flip;
+  }
+}
+BENCHMARK(BM_PolicyRebuild)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+// A volume with no emission must cost nothing extra under the emission preset: camera paths/s on
+// the cloud scene, conventional (0) versus emission (1), 2 threads.
+void BM_NonEmissiveCost(benchmark::State& state) {
+  const char* preset = state.range(0) == 0 ? "conventional" : "emission";
+  auto scene = Scene::build(loadSceneDesc(scenePath("cloud.json"), {"camera.resolution=[160,90]", std::string("strategy.preset=\"") + preset + "\""}));
+  ProgressiveRenderer renderer(scene, RenderOptions{2, 16});
+  Film film;
+  for (auto _ : state) renderer.renderPass(film, 1);
+  state.SetItemsProcessed(state.iterations() * 160 * 90);
+  state.SetLabel(std::string("cloud, ") + preset);
+}
+BENCHMARK(BM_NonEmissiveCost)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 }  // namespace
 

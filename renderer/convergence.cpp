@@ -146,3 +146,68 @@ void writeConvergenceSvg(const std::string& path, const std::vector<ConvergenceP
 }
 
 }  // namespace candela
+
+namespace candela {
+
+void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, const std::string& title, const std::string& xLabel) {
+  std::vector<std::string> order;
+  double xMin = 1e30, xMax = -1e30, yMin = 1e30, yMax = -1e30;
+  for (const auto& p : points) {
+    if (std::find(order.begin(), order.end(), p.strategy) == order.end()) order.push_back(p.strategy);
+    if (!(p.efficiency > 0.0) || !std::isfinite(p.efficiency)) continue;
+    yMin = std::min(yMin, p.efficiency), yMax = std::max(yMax, p.efficiency);
+    if (p.value > 0.0) xMin = std::min(xMin, p.value), xMax = std::max(xMax, p.value);
+  }
+  if (xMin > xMax) xMin = 0.1, xMax = 10;
+  if (yMin > yMax) yMin = 0.1, yMax = 10;
+  const double lx0 = std::floor(std::log10(xMin)), lx1 = std::max(lx0 + 1, std::ceil(std::log10(xMax)));
+  const double ly0 = std::floor(std::log10(yMin)), ly1 = std::max(ly0 + 1, std::ceil(std::log10(yMax)));
+  const double W = 720, H = 480, L = 80, R = 190, T = 50, B = 60;
+  auto X = [&](double v) { return L + (std::log10(v) - lx0) / (lx1 - lx0) * (W - L - R); };
+  auto Y = [&](double e) { return H - B - (std::log10(e) - ly0) / (ly1 - ly0) * (H - T - B); };
+  static const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"};
+  std::ostringstream s;
+  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' font-size='12'>\n"
+    << "<rect width='100%' height='100%' fill='white'/>\n"
+    << "<text x='" << W / 2 << "' y='24' text-anchor='middle' font-size='15'>" << title << "</text>\n";
+  for (double d = lx0; d <= lx1 + 1e-9; ++d) {
+    s << "<line x1='" << X(std::pow(10.0, d)) << "' y1='" << T << "' x2='" << X(std::pow(10.0, d)) << "' y2='" << H - B << "' stroke='#ccc'/>\n";
+    s << "<text x='" << X(std::pow(10.0, d)) << "' y='" << H - B + 18 << "' text-anchor='middle'>1e" << d << "</text>\n";
+  }
+  for (double d = ly0; d <= ly1 + 1e-9; ++d) {
+    s << "<line x1='" << L << "' y1='" << Y(std::pow(10.0, d)) << "' x2='" << W - R << "' y2='" << Y(std::pow(10.0, d)) << "' stroke='#ccc'/>\n";
+    s << "<text x='" << L - 8 << "' y='" << Y(std::pow(10.0, d)) + 4 << "' text-anchor='end'>1e" << d << "</text>\n";
+  }
+  s << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B << "' fill='none' stroke='black'/>\n"
+    << "<text x='" << (L + W - R) / 2 << "' y='" << H - 18 << "' text-anchor='middle'>" << xLabel << " (log)</text>\n"
+    << "<text transform='translate(20," << (T + H - B) / 2 << ") rotate(-90)' text-anchor='middle'>efficiency 1/(relMSE x time) (log)</text>\n";
+  for (size_t i = 0; i < order.size(); ++i) {
+    const char* c = colors[i % 6];
+    std::vector<const SweepPoint*> pts;
+    for (const auto& p : points)
+      if (p.strategy == order[i] && p.efficiency > 0.0 && std::isfinite(p.efficiency)) pts.push_back(&p);
+    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->value < b->value; });
+    s << "<polyline fill='none' stroke='" << c << "' stroke-width='2' points='";
+    for (auto* p : pts)
+      if (p->value > 0.0) s << X(p->value) << ',' << Y(p->efficiency) << ' ';
+    s << "'/>\n";
+    for (auto* p : pts) {
+      if (p->value > 0.0) {
+        s << "<circle cx='" << X(p->value) << "' cy='" << Y(p->efficiency) << "' r='3.5' fill='" << c << "'/>\n";
+      } else {
+        s << "<line x1='" << L << "' y1='" << Y(p->efficiency) << "' x2='" << W - R << "' y2='" << Y(p->efficiency) << "' stroke='" << c
+          << "' stroke-dasharray='6,4'/><text x='" << L + 6 << "' y='" << Y(p->efficiency) - 5 << "' fill='" << c << "'>" << xLabel
+          << " = 0</text>\n";
+      }
+    }
+    const double ly = T + 20 + 22 * static_cast<double>(i);
+    s << "<line x1='" << W - R + 15 << "' y1='" << ly << "' x2='" << W - R + 40 << "' y2='" << ly << "' stroke='" << c
+      << "' stroke-width='3'/><text x='" << W - R + 46 << "' y='" << ly + 4 << "'>" << order[i] << "</text>\n";
+  }
+  s << "</svg>\n";
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write");
+  out << s.str();
+}
+
+}  // namespace candela

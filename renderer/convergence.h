@@ -38,6 +38,15 @@ struct ConvergencePoint {
   uint64_t rejected = 0;
 };
 
+// Efficiency 1 / (relMSE x time) versus a swept parameter, one line per strategy; x is logarithmic
+// over the positive values, and a value of 0 is drawn as a dashed horizontal line per strategy.
+struct SweepPoint {
+  std::string strategy;
+  double value = 0.0;
+  double efficiency = 0.0;
+};
+void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, const std::string& title, const std::string& xLabel);
+
 void writeConvergenceCsv(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& comment);
 // Error versus time on log-log axes, one line per strategy.
 void writeConvergenceSvg(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& title);

@@ -43,10 +43,23 @@ class VoxelGrid {
       const Vec3 f0 = glm::floor(p);
       const glm::ivec3 i0(f0);
       const Vec3 w = p - f0;
-      const float v000 = voxel(i0.x, i0.y, i0.z), v100 = voxel(i0.x + 1, i0.y, i0.z);
-      const float v010 = voxel(i0.x, i0.y + 1, i0.z), v110 = voxel(i0.x + 1, i0.y + 1, i0.z);
-      const float v001 = voxel(i0.x, i0.y, i0.z + 1), v101 = voxel(i0.x + 1, i0.y, i0.z + 1);
-      const float v011 = voxel(i0.x, i0.y + 1, i0.z + 1), v111 = voxel(i0.x + 1, i0.y + 1, i0.z + 1);
+      float v000, v100, v010, v110, v001, v101, v011, v111;
+      if ((i0.x & 7) != 7 && (i0.y & 7) != 7 && (i0.z & 7) != 7) {
+        // All eight voxels lie in one 8^3 leaf (about 2/3 of lookups): read them from the leaf's
+        // array directly instead of through eight accessor calls. No leaf there means a tile or the
+        // background: one constant value, and its trilinear interpolation is that value.
+        const nanovdb::Coord c(i0.x, i0.y, i0.z);
+        const auto* leaf = acc_.probeLeaf(c);
+        if (!leaf) return acc_.getValue(c);
+        const uint32_t o = nanovdb::NanoLeaf<float>::CoordToOffset(c);  // x-major: +64 x, +8 y, +1 z
+        v000 = leaf->getValue(o), v001 = leaf->getValue(o + 1), v010 = leaf->getValue(o + 8), v011 = leaf->getValue(o + 9);
+        v100 = leaf->getValue(o + 64), v101 = leaf->getValue(o + 65), v110 = leaf->getValue(o + 72), v111 = leaf->getValue(o + 73);
+      } else {
+        v000 = voxel(i0.x, i0.y, i0.z), v100 = voxel(i0.x + 1, i0.y, i0.z);
+        v010 = voxel(i0.x, i0.y + 1, i0.z), v110 = voxel(i0.x + 1, i0.y + 1, i0.z);
+        v001 = voxel(i0.x, i0.y, i0.z + 1), v101 = voxel(i0.x + 1, i0.y, i0.z + 1);
+        v011 = voxel(i0.x, i0.y + 1, i0.z + 1), v111 = voxel(i0.x + 1, i0.y + 1, i0.z + 1);
+      }
       const float x00 = v000 + w.x * (v100 - v000), x10 = v010 + w.x * (v110 - v010);
       const float x01 = v001 + w.x * (v101 - v001), x11 = v011 + w.x * (v111 - v011);
       const float y0 = x00 + w.y * (x10 - x00), y1 = x01 + w.y * (x11 - x01);
