@@ -43,6 +43,9 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
   std::vector<std::string> warnings;
   auto scene = Scene::build(desc, &warnings);
   for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
+  if (auto probes = scene->probes())
+    std::printf("probes: %zu learned of %d placed (spacing %.3g, radius %.3g) in %.2f s%s\n", probes->probes().size(), probes->placed(),
+                probes->spacing(), probes->radius(), probes->learnSeconds(), probes->complete() ? "" : " (time budget reached)");
   return scene;
 }
 

@@ -53,6 +53,8 @@ EmissionLight::EmissionLight(const Medium& medium, int cellSize) : medium_(&medi
     cellPdf_[i] = static_cast<float>(energy[i] / total);
     acc += energy[i] / total;
     cellOf_.push_back(static_cast<int>(i));
+    const Vec3 centre = layout_.origin + (Vec3(layout_.cellCoords(static_cast<int>(i))) + 0.5f) * layout_.cellExtent;
+    centroid_ += static_cast<float>(energy[i] / total) * Vec3(medium.worldFromIndex() * glm::vec4(centre, 1.0f));
     cdf_.push_back(static_cast<float>(acc));
   }
   cdf_.back() = 1.0f;

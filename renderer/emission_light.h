@@ -25,6 +25,8 @@ class EmissionLight {
   float power() const { return power_; }
   const CoarseGrid& layout() const { return layout_; }
   int cellSize() const { return cellSize_; }
+  // Energy-weighted centre of the emission (world), the equi-angular target for this volume.
+  const Vec3& centroid() const { return centroid_; }
 
   // Samples a direction from world point x toward the emission; returns false if it cannot.
   bool sample(const Vec3& x, float u0, float u1, float u2, float u3, Vec3& wi) const;
@@ -43,6 +45,7 @@ class EmissionLight {
   std::vector<float> cdf_;
   float cellVolume_ = 0.0f;      // world volume of one cell (the transform is affine)
   float power_ = 0.0f;
+  Vec3 centroid_{0.0f};
 };
 
 }  // namespace candela

@@ -16,6 +16,74 @@ Vec3 sampleCosineHemisphere(Vec2 u) {
 
 }  // namespace
 
+PathTracer::PathTracer(const Scene& scene) : scene_(scene), probes_(scene.probes()) {
+  // Equi-angular targets: point-like lights, and each emissive volume's emission centroid.
+  for (const Light& l : scene.lights())
+    if (l.type() == LightType::Point || l.type() == LightType::Spot || l.type() == LightType::Sphere)
+      equiAngularTargets_.push_back({l.desc().position, l.power(scene.radius())});
+  for (const EmissionLight* v : scene.volumeLights()) equiAngularTargets_.push_back({v->centroid(), v->power()});
+}
+
+Rgb PathTracer::inScattered(const Vec3& p, const Vec3& wo, float g, Rng& rng) const {
+  return directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), false, rng);
+}
+
+struct GuideDensity {
+  bool piecewiseLinear = true;
+  PiecewiseLinearDistance linear;
+  EquiAngularDistance equiAngular;
+  std::vector<DistanceKnot> knots;
+  float sample(float u, float& pdf) const { return piecewiseLinear ? linear.sample(u, pdf) : equiAngular.sample(u, pdf); }
+  float pdf(float t) const { return piecewiseLinear ? linear.pdf(t) : equiAngular.pdf(t); }
+};
+
+void PathTracer::buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const {
+  const GuidingSettings& g = scene_.strategy().guiding;
+  out.piecewiseLinear = g.guide != DistanceGuide::EquiAngular;
+  if (out.piecewiseLinear) {
+    out.knots.clear();
+    if (probes_) probes_->gatherKnots(ray, tIn, tOut, out.knots);
+    out.linear.build(tIn, tOut, out.knots, g.floor);
+  } else {
+    out.equiAngular.build(ray, tIn, tOut, equiAngularTargets_);
+  }
+}
+
+bool PathTracer::mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const {
+  tIn = kInfinity;
+  tOut = 0.0f;
+  for (const Medium* m : scene_.media().media) {
+    const MajorantGrid& grid = m->majorantGrid();
+    if (grid.empty()) continue;
+    const Vec3 o = Vec3(m->indexFromWorld() * glm::vec4(ray.origin, 1.0f));
+    const Vec3 d = Vec3(m->indexFromWorld() * glm::vec4(ray.direction, 0.0f));
+    float a = 0.0f, b = tEnd;
+    for (int axis = 0; axis < 3 && a <= b; ++axis) {
+      const float lo = grid.origin()[axis], hi = grid.domainMax()[axis];
+      if (d[axis] == 0.0f) {
+        if (o[axis] < lo || o[axis] > hi) b = -1.0f;
+        continue;
+      }
+      float t0 = (lo - o[axis]) / d[axis], t1 = (hi - o[axis]) / d[axis];
+      if (t0 > t1) std::swap(t0, t1);
+      a = std::max(a, t0);
+      b = std::min(b, t1);
+    }
+    if (a < b) tIn = std::min(tIn, a), tOut = std::max(tOut, b);
+  }
+  return tIn < tOut;
+}
+
+float PathTracer::guidedWeight(float r) const {
+  switch (scene_.strategy().guiding.combination) {
+    case GuideCombination::Balance: return 1.0f / (1.0f + r);
+    case GuideCombination::Power: return std::isfinite(r * r) ? 1.0f / (1.0f + r * r) : 0.0f;
+    case GuideCombination::Average: return 0.5f;
+    case GuideCombination::GuidedOnly: return 1.0f;
+  }
+  return 0.0f;
+}
+
 float PathTracer::visibility(const Vec3& p, const Vec3& wi, float distance, int targetLight, Rng& rng) const {
   const float tMax = std::isfinite(distance) ? distance * (1.0f - 1e-4f) : kInfinity;
   const Ray ray{p, wi};
@@ -96,24 +164,115 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
 }
 
 Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
+  PathState state;
+  state.ray = cameraRay;
+  state.prevPos = cameraRay.origin;
+  return trace(state, rng);
+}
+
+bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng) const {
   const Scene& s = scene_;
-  const int maxDepth = s.render().max_depth;
-  const int rrDepth = s.strategy().russian_roulette_depth;
-  const auto& lights = s.lights();
-  Ray ray = cameraRay;
-  Rgb L(0.0f), beta(1.0f);
-  int vertices = 0;           // scattering and bounce events so far
-  bool lightsTaken = false;   // the last vertex already took all direct light by NEE
-  float prevPdf = 0.0f;       // solid-angle pdf of the direction that made `ray` (0: camera ray)
-  Vec3 prevPos = ray.origin;
+  if (st.vertices >= s.render().max_depth) return false;
+  ++st.vertices;
+  const bool last = st.vertices == s.render().max_depth;
+  const Vec3 wo = -st.ray.direction;
+  L += st.beta * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng);
+  if (last) {
+    // After the last vertex only volume emission that no light sampler covers is still missing.
+    if (!s.hasEmissiveMedia() || !s.volumeLights().empty()) return false;
+    st.lightsTaken = true;
+  }
+  if (st.vertices >= s.strategy().russian_roulette_depth) {
+    const float q = std::min(1.0f, maxComponent(st.beta));
+    if (rng.uniform() >= q) return false;
+    st.beta /= q;
+  }
+  float pdf;
+  const Vec3 wi = hgSample(wo, g, Vec2(rng.uniform(), rng.uniform()), pdf);
+  st.prevPdf = pdf;
+  st.prevPos = p;
+  st.ray = Ray{p, wi};
+  ++st.segment;
+  return true;
+}
+
+namespace {
+// The guided density of the segment being traced on this thread. Built before the tracked walk;
+// the tracked weight and the guided sample read it before any recursion rebuilds it.
+thread_local GuideDensity tlsGuide;
+}  // namespace
+
+Rgb PathTracer::guidedSample(const PathState& st, float tIn, float tOut, Rng& rng) const {
+  (void)tIn;
+  (void)tOut;
+  const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
+  float pdf = 0.0f;
+  const float t = tlsGuide.sample(rng.uniform(), pdf);
+  if (!(pdf > 0.0f)) return Rgb(0.0f);
+  // Null collisions on [0, t) by ratio tracking, with exact products (no roulette): `ratio` is the
+  // estimator's transmittance, `nullProbability` what the tracked technique would have paid.
+  float ratio = 1.0f, nullProbability = 1.0f;
+  trackCollisions(s.media(), st.ray, t, rng, [&](const Collision& c) {
+    float sigmaS = 0.0f;
+    for (int i = 0; i < c.count; ++i) sigmaS += c.sigmaT[i] * c.medium(i).albedoAverage();
+    const float sigmaN = std::max(0.0f, c.muBar - c.sigmaTTotal);
+    ratio *= sigmaN / c.muBar;
+    nullProbability *= gather ? (sigmaS + sigmaN > 0.0f ? sigmaN / (sigmaS + sigmaN) : 0.0f) : sigmaN / c.muBar;
+    return ratio > 0.0f;
+  });
+  if (!(ratio > 0.0f)) return Rgb(0.0f);
+  // The scattering vertex at t.
+  const Vec3 p = st.ray.at(t);
+  const auto& media = s.mediaOwned();
+  float share[kMaxMedia] = {};
+  float sigmaS = 0.0f, sigmaT = 0.0f, muBar = 0.0f;
+  for (size_t i = 0; i < media.size(); ++i) {
+    const Medium& m = *media[i];
+    const Vec3 idx = Vec3(m.indexFromWorld() * glm::vec4(p, 1.0f));
+    const float sigmaTi = Medium::Sampler(m).sigmaT(idx);
+    share[i] = sigmaTi * m.albedoAverage();
+    sigmaS += share[i];
+    sigmaT += sigmaTi;
+    muBar += m.majorantAt(idx);
+  }
+  if (!(sigmaS > 0.0f)) return Rgb(0.0f);
+  const float sigmaN = std::max(0.0f, muBar - sigmaT);
+  const float scatterDensity = gather ? muBar * sigmaS / (sigmaS + sigmaN) : sigmaS;
+  const float weight = guidedWeight(nullProbability * scatterDensity / pdf);
+  if (!(weight > 0.0f)) return Rgb(0.0f);
+  float pick = rng.uniform() * sigmaS;
+  size_t chosen = media.size() - 1;
+  for (size_t i = 0; i < media.size(); ++i) {
+    if (pick < share[i]) {
+      chosen = i;
+      break;
+    }
+    pick -= share[i];
+  }
+  const Medium& m = *media[chosen];
+  PathState g = st;
+  g.beta = st.beta * (ratio * sigmaS / pdf * weight) * (m.albedo() / m.albedoAverage());
+  Rgb L(0.0f);
+  if (scatterVertex(g, p, m.g(), L, rng)) L += trace(g, rng);
+  return L;
+}
+
+Rgb PathTracer::trace(PathState st, Rng& rng) const {
+  const Scene& s = scene_;
+  const StrategySettings& strategy = s.strategy();
+  const auto& lights = s.lights();
+  const int maxDepth = s.render().max_depth;
+  const bool gather = strategy.emission.gather_every_collision;
   const bool emissive = s.hasEmissiveMedia();
   const bool volumeNee = !s.volumeLights().empty();
-  // After the last vertex's NEE, a continuation is needed only to gather volume emission that no
-  // light sampler covers.
+  const bool guiding = strategy.guiding.guide != DistanceGuide::None;
   const bool needTail = emissive && !volumeNee;
+  GuideDensity& guide = tlsGuide;
+  Rgb L(0.0f);
 
   for (;;) {
+    const Ray ray = st.ray;
     SurfaceHit hit = s.surfaces().intersect(ray, kInfinity);
     float tEnd = hit.t;
     int lightHit = -1;
@@ -125,12 +284,22 @@ Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
 
     // Emission met along a phase/BSDF-sampled ray competes with NEE toward emissive volumes.
     const float emissionWeight =
-        (volumeNee && prevPdf > 0.0f) ? powerHeuristic(prevPdf, volumeLightPdf(prevPos, ray.direction)) : 1.0f;
+        (volumeNee && st.prevPdf > 0.0f) ? powerHeuristic(st.prevPdf, volumeLightPdf(st.prevPos, ray.direction)) : 1.0f;
+
+    // A guided distance sample for this segment (talk 2.2)? Its density must exist before the
+    // tracked walk, whose scattering is weighted against it.
+    float tIn = 0.0f, tOut = 0.0f;
+    const bool guided = guiding && st.segment < strategy.guiding.guided_segments && !st.lightsTaken && st.vertices < maxDepth &&
+                        mediumInterval(ray, tEnd, tIn, tOut);
+    if (guided) buildGuide(ray, tIn, tOut, guide);
+    const PathState segmentStart = st;
 
     enum class Event { None, Absorbed, Scattered } event = Event::None;
     Vec3 scatterPos(0.0f);
-    float scatterG = 0.0f;
-    float walkWeight = 1.0f;  // product of absorption weights since the last roulette (gather mode)
+    float scatterG = 0.0f, scatterT = 0.0f;
+    float nullProbability = 1.0f;  // prod of P_null over this walk's null collisions (for MIS)
+    float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering
+    float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather mode)
     trackCollisions(s.media(), ray, tEnd, rng, [&](const Collision& c) {
       float sigmaA = 0.0f, sigmaS = 0.0f;
       for (int i = 0; i < c.count; ++i) {
@@ -138,22 +307,27 @@ Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
         sigmaS += c.sigmaT[i] * a;
         sigmaA += c.sigmaT[i] * (1.0f - a);
       }
+      const float sigmaN = std::max(0.0f, c.muBar - c.sigmaTTotal);
       const float u = rng.uniform();
       float pick;  // in [0, sigmaS) when the collision scatters
       if (gather) {
         // Talk 2.1 / METHOD.md s.2: P_a = 1, add mu_a Le / mu_bar; continue with absorption as a
         // weight, choosing scatter with P_s = mu_s / (mu_s + mu_n), both weighted 1 - mu_a / mu_bar.
-        if (emissive) L += beta * c.emissionSource() * (emissionWeight / c.muBar);
-        const float sigmaN = std::max(0.0f, c.muBar - c.sigmaTTotal);
+        if (emissive) L += st.beta * c.emissionSource() * (emissionWeight / c.muBar);
         const float keep = (sigmaS + sigmaN) / c.muBar;
         if (!(keep > 0.0f)) {
           event = Event::Absorbed;
           return false;
         }
-        beta *= keep;
-        walkWeight *= keep;
+        st.beta *= keep;
         pick = u * (sigmaS + sigmaN);
         if (!(pick < sigmaS)) {
+          if (guided) {
+            // Guided segments skip the roulette: its survival probability would enter p_tracked.
+            nullProbability *= sigmaN / (sigmaS + sigmaN);
+            return true;
+          }
+          walkWeight *= keep;
           if (walkWeight < 0.1f) {
             // Roulette on the weight lost to absorption along this walk: unbiased, keeps it short.
             const float survive = walkWeight * 10.0f;
@@ -161,22 +335,27 @@ Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
               event = Event::Absorbed;
               return false;
             }
-            beta /= survive;
+            st.beta /= survive;
             walkWeight = 1.0f;
           }
           return true;  // null collision
         }
+        scatterDensity = c.muBar * sigmaS / (sigmaS + sigmaN);
       } else {
         // Conventional analog events.
         const float x = u * c.muBar;
         if (x < sigmaA) {
           // Absorption: E[beta * Le] with per-channel mu_a handled by the weight mu_a,rgb / mu_a,avg.
-          if (emissive) L += beta * c.emissionSource() * (emissionWeight / sigmaA);
+          if (emissive) L += st.beta * c.emissionSource() * (emissionWeight / sigmaA);
           event = Event::Absorbed;
           return false;
         }
         pick = x - sigmaA;
-        if (!(pick < sigmaS)) return true;  // null collision: the weight mu_n / (P_n mu_bar) is exactly 1
+        if (!(pick < sigmaS)) {
+          nullProbability *= sigmaN / c.muBar;
+          return true;  // null collision: the weight mu_n / (P_n mu_bar) is exactly 1
+        }
+        scatterDensity = sigmaS;
       }
       // Scattering: pick the medium by its share of mu_s, weight its RGB albedo against the average.
       int chosen = c.count - 1;
@@ -189,80 +368,73 @@ Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
         pick -= si;
       }
       const Medium& m = c.medium(chosen);
-      beta *= m.albedo() / m.albedoAverage();
+      st.beta *= m.albedo() / m.albedoAverage();
       scatterG = m.g();
       scatterPos = c.p;
+      scatterT = c.t;
       event = Event::Scattered;
       return false;
     });
+
+    if (guided) {
+      // MIS weight of the tracked scattering, then the guided sample from the segment's start.
+      if (event == Event::Scattered) {
+        const float pg = guide.pdf(scatterT);
+        st.beta *= pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
+      }
+      L += guidedSample(segmentStart, tIn, tOut, rng);
+    }
     if (event == Event::Absorbed) break;
 
     if (event == Event::Scattered) {
-      if (vertices >= maxDepth) break;
-      ++vertices;
-      const bool last = vertices == maxDepth;
-      const Vec3 wo = -ray.direction;
-      L += beta * directLight(scatterPos, wo, scatterG, Vec3(0.0f), Rgb(0.0f), !last, rng);
-      if (last) {
-        if (!needTail) break;
-        lightsTaken = true;
-      }
-      if (vertices >= rrDepth) {
-        const float q = std::min(1.0f, maxComponent(beta));
-        if (rng.uniform() >= q) break;
-        beta /= q;
-      }
-      float pdf;
-      const Vec3 wi = hgSample(wo, scatterG, Vec2(rng.uniform(), rng.uniform()), pdf);
-      prevPdf = pdf;
-      prevPos = scatterPos;
-      ray = Ray{scatterPos, wi};
+      if (isBlack(st.beta) || !scatterVertex(st, scatterPos, scatterG, L, rng)) break;
       continue;
     }
 
     // The walk reached a light, a surface or infinity.
     if (lightHit >= 0) {
-      if (!lightsTaken) {
+      if (!st.lightsTaken) {
         const Light& light = lights[static_cast<size_t>(lightHit)];
-        const float w = prevPdf > 0.0f
-                            ? powerHeuristic(prevPdf, s.lightSampler().pmf(lightHit) * light.pdf(prevPos, ray.direction))
+        const float w = st.prevPdf > 0.0f
+                            ? powerHeuristic(st.prevPdf, s.lightSampler().pmf(lightHit) * light.pdf(st.prevPos, ray.direction))
                             : 1.0f;
-        L += beta * light.emitted() * w;
+        L += st.beta * light.emitted() * w;
       }
       break;
     }
     if (!hit.hit()) {
-      if (!lightsTaken)
+      if (!st.lightsTaken)
         for (size_t i = 0; i < lights.size(); ++i) {
           if (lights[i].type() != LightType::Environment) continue;
-          const float w = prevPdf > 0.0f ? powerHeuristic(prevPdf, s.lightSampler().pmf(static_cast<int>(i)) * kInv4Pi) : 1.0f;
-          L += beta * lights[i].emitted() * w;
+          const float w = st.prevPdf > 0.0f ? powerHeuristic(st.prevPdf, s.lightSampler().pmf(static_cast<int>(i)) * kInv4Pi) : 1.0f;
+          L += st.beta * lights[i].emitted() * w;
         }
       break;
     }
     // Diffuse surface.
-    if (vertices >= maxDepth) break;
-    ++vertices;
-    const bool last = vertices == maxDepth;
+    if (st.vertices >= maxDepth) break;
+    ++st.vertices;
+    const bool last = st.vertices == maxDepth;
     const Vec3 n = glm::dot(hit.normal, ray.direction) < 0.0f ? hit.normal : -hit.normal;
     const Vec3 hitPos = ray.at(hit.t);
     const Vec3 p = hitPos + n * surfaceOffset(hitPos);
-    L += beta * directLight(p, -ray.direction, 0.0f, n, hit.albedo, !last, rng);
+    L += st.beta * directLight(p, -ray.direction, 0.0f, n, hit.albedo, !last, rng);
     if (last) {
       if (!needTail) break;
-      lightsTaken = true;
+      st.lightsTaken = true;
     }
-    if (vertices >= rrDepth) {
-      const float q = std::min(1.0f, maxComponent(beta * hit.albedo));
+    if (st.vertices >= strategy.russian_roulette_depth) {
+      const float q = std::min(1.0f, maxComponent(st.beta * hit.albedo));
       if (rng.uniform() >= q) break;
-      beta /= q;
+      st.beta /= q;
     }
     const Vec3 local = sampleCosineHemisphere(Vec2(rng.uniform(), rng.uniform()));
     const Vec3 wi = toWorld(local, n);
-    beta *= hit.albedo;
-    prevPdf = local.z * kInvPi;
-    prevPos = p;
-    ray = Ray{p, wi};
+    st.beta *= hit.albedo;
+    st.prevPdf = local.z * kInvPi;
+    st.prevPos = p;
+    st.ray = Ray{p, wi};
+    ++st.segment;
   }
   return L;
 }

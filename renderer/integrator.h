@@ -7,45 +7,75 @@
 // - majorant policy: the medium's per-cell mu_bar, optionally emission-aware (medium.cpp);
 // - light sampler: lights and, with strategy.emission.light_sampling, emissive volumes by their
 //   energy grid (Algorithm 2), all chosen by power; emission met along a phase/BSDF-sampled ray is
-//   MIS-weighted against that (METHOD.md s.3).
+//   MIS-weighted against that (METHOD.md s.3);
+// - distance sampler: with strategy.guiding, each guided ray segment also draws a guided distance
+//   (probes or equi-angular) whose null collisions on [0, t] come from ratio tracking; it is
+//   combined with the tracked scattering by MIS with p_guided = p_g(t) and
+//   p_tracked = prod(P_null) * mu_bar(t) P_s(t) (METHOD.md s.4; Miller et al. 2019). Emission
+//   along the ray is counted once, by the tracked walk.
 // Scattering does next-event estimation (ratio-tracked transmittance, or Algorithm 1 toward
 // emissive volumes), then samples HG; surfaces are diffuse.
 //
 // Path length: at most render.max_depth scattering/bounce vertices. The last vertex takes all its
-// direct light by NEE (weight 1) and its continuation gathers only volume emission, so every
-// strategy computes exactly the same truncated image.
+// direct light by NEE (weight 1) and its continuation gathers only volume emission no light
+// sampler covers, so every strategy computes exactly the same truncated image.
 #pragma once
 
+#include "distance_sampler.h"
+#include "probes.h"
 #include "scene.h"
 
 namespace candela {
 
+struct GuideDensity;  // integrator.cpp: the guided distance density of one ray segment
+
 class PathTracer {
  public:
-  explicit PathTracer(const Scene& scene) : scene_(scene) {}
+  explicit PathTracer(const Scene& scene);
   // Radiance arriving along the camera ray (scene-linear RGB). May be non-finite on a bug; the film
   // rejects and counts such samples.
   Rgb radiance(const Ray& cameraRay, Rng& rng) const;
 
- private:
-  // Direct light at a point by light sampling. `g` is used for medium points (normal == 0), else a
-  // diffuse BSDF with `albedo` around `normal`. `useMis` weights area/environment lights against
-  // phase/BSDF sampling with the power heuristic.
-  Rgb directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis, Rng& rng) const;
-  // Transmittance between p and p + wi * distance: surfaces and sphere lights occlude; media by
-  // ratio tracking.
-  float visibility(const Vec3& p, const Vec3& wi, float distance, int targetLight, Rng& rng) const;
-  // Distance to the nearest surface or sphere light along a ray (what stops emission gathering).
-  float nearestOccluder(const Ray& ray) const;
+  // Light scattered toward wo at a medium point with HG parameter g, by light sampling alone
+  // (used to learn probes): the phase-weighted direct light, emissive volumes included.
+  Rgb inScattered(const Vec3& p, const Vec3& wo, float g, Rng& rng) const;
 
- public:
   // Solid-angle pdf of the volume-light technique producing direction w from x: the mixture
   // sum_m pmf_m p_m(w) over emissive volumes (Algorithm 2 for each).
   float volumeLightPdf(const Vec3& x, const Vec3& w) const;
 
  private:
+  struct PathState {
+    Ray ray;
+    Rgb beta{1.0f};
+    int vertices = 0;          // scattering and bounce events so far
+    int segment = 0;           // index of `ray` along the path (0: the camera ray)
+    bool lightsTaken = false;  // the last vertex already took all direct light by NEE
+    float prevPdf = 0.0f;      // solid-angle pdf of the direction that made `ray` (0: camera ray)
+    Vec3 prevPos{0.0f};
+  };
+
+  // Follows a path from its current ray to the end; returns the radiance it gathers.
+  Rgb trace(PathState state, Rng& rng) const;
+  // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
+  // false when the path ends there.
+  bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng) const;
+  // The guided distance sample of one ray segment and the path continuing from it (METHOD.md s.4).
+  Rgb guidedSample(const PathState& state, float tIn, float tOut, Rng& rng) const;
+  // The guided distance density for a ray over [tIn, tOut].
+  void buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const;
+  // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
+  bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
+  // MIS weight of the guided technique given r = p_tracked / p_guided.
+  float guidedWeight(float r) const;
+
+  Rgb directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis, Rng& rng) const;
+  float visibility(const Vec3& p, const Vec3& wi, float distance, int targetLight, Rng& rng) const;
+  float nearestOccluder(const Ray& ray) const;
 
   const Scene& scene_;
+  std::shared_ptr<const ProbeSet> probes_;  // the set serving this tracer (swapped sets never disturb it)
+  std::vector<EquiAngularTarget> equiAngularTargets_;
 };
 
 }  // namespace candela

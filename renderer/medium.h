@@ -39,6 +39,14 @@ class Medium {
   void applyStrategy(const StrategySettings& strategy);
   // The combined majorant mu_bar of a cell of the majorant grid (world units).
   float cellMajorant(int cell) const { return cellMajorant_[static_cast<size_t>(cell)]; }
+  // The combined majorant mu_bar at an index-space point (0 outside the majorant domain).
+  float majorantAt(const Vec3& indexPos) const {
+    if (majorant_.empty()) return 0.0f;
+    const Vec3 c = (indexPos - majorant_.origin()) / majorant_.cellExtent();
+    const glm::ivec3& res = majorant_.resolution();
+    if (!(c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f && c.x < res.x && c.y < res.y && c.z < res.z)) return 0.0f;
+    return cellMajorant_[static_cast<size_t>(majorant_.cellIndex(static_cast<int>(c.x), static_cast<int>(c.y), static_cast<int>(c.z)))];
+  }
   // Geometric-mean voxel edge in world units (the emission cap's c / voxel_size).
   float voxelSize() const { return voxelSize_; }
   // The emissive volume as a light (null unless emissive and light sampling is on).

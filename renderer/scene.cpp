@@ -101,13 +101,53 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
   for (const auto& l : desc.lights) scene->lights_.emplace_back(l);
   scene->buildLightSampler();
   scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
+  if (desc.strategy.guiding.guide == DistanceGuide::Probes) scene->learnProbes();
   return scene;
 }
 
 void Scene::setStrategy(const StrategySettings& strategy) {
+  cancelProbes_ = true;  // a background relearn reads the media being changed here
+  waitForProbes();
+  const GuidingSettings before = desc_.strategy.guiding;
   desc_.strategy = strategy;
   for (auto& m : media_) m->applyStrategy(strategy);
   buildLightSampler();
+  const GuidingSettings& g = strategy.guiding;
+  const bool probeSettingsChanged = before.probe_spacing != g.probe_spacing || before.probe_radius != g.probe_radius ||
+                                    before.probe_samples != g.probe_samples || before.probe_budget_s != g.probe_budget_s;
+  if (g.guide == DistanceGuide::Probes && (!probes() || probeSettingsChanged)) learnProbes();
+}
+
+void Scene::learnProbes() {
+  waitForProbes();
+  std::atomic_store(&probes_, ProbeSet::learn(*this, desc_.strategy.guiding));
+}
+
+void Scene::relearnProbesAsync() {
+  cancelProbes_ = true;
+  waitForProbes();
+  cancelProbes_ = false;
+  probeThread_ = std::thread([this] {
+    auto fresh = ProbeSet::learn(*this, desc_.strategy.guiding, &cancelProbes_);
+    if (!cancelProbes_) std::atomic_store(&probes_, fresh);
+  });
+}
+
+void Scene::waitForProbes() {
+  if (probeThread_.joinable()) probeThread_.join();
+}
+
+void Scene::setCamera(const CameraDesc& camera) {
+  cancelProbes_ = true;
+  waitForProbes();
+  desc_.camera = camera;
+  camera_ = Camera(camera);
+  if (desc_.strategy.guiding.guide == DistanceGuide::Probes) relearnProbesAsync();
+}
+
+Scene::~Scene() {
+  cancelProbes_ = true;
+  waitForProbes();
 }
 
 void Scene::buildLightSampler() {

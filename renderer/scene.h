@@ -3,13 +3,16 @@
 #pragma once
 
 #include "lights.h"
+#include "probes.h"
 #include "medium.h"
 #include "scene_desc.h"
 #include "surfaces.h"
 #include "tracking.h"
 
+#include <atomic>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace candela {
@@ -49,8 +52,23 @@ class Scene {
   float radius() const { return radius_; }
   Vec3 center() const { return center_; }
 
-  // Applies new strategy settings, rebuilding only what depends on them (majorants).
+  // Applies new strategy settings, rebuilding only what depends on them (majorants, emission
+  // grids, light selection; probes are learned when probe guiding turns on or its settings change).
   void setStrategy(const StrategySettings& strategy);
+
+  // The probe set serving renders now (null without probe guiding). Safe to call while a
+  // background relearn runs: the old set keeps serving until the new one is swapped in.
+  std::shared_ptr<const ProbeSet> probes() const { return std::atomic_load(&probes_); }
+  // Learns probes now (blocking), for the current camera, lights and volumes.
+  void learnProbes();
+  // Learns probes on a background thread and swaps them in when done; a relearn still running is
+  // cancelled first. For live edits of the camera, lights or volume parameters.
+  void relearnProbesAsync();
+  // Waits for a background relearn to finish.
+  void waitForProbes();
+  // Moves the camera (a live edit); relearns probes in the background when guiding uses them.
+  void setCamera(const CameraDesc& camera);
+  ~Scene();
 
  private:
   Scene(const SceneDesc& desc);
@@ -64,6 +82,9 @@ class Scene {
   void buildLightSampler();
   std::unique_ptr<Surfaces> surfaces_;
   bool hasEmissiveMedia_ = false;
+  std::shared_ptr<const ProbeSet> probes_;
+  std::thread probeThread_;
+  std::atomic<bool> cancelProbes_{false};
   float radius_ = 1.0f;
   Vec3 center_{0.0f};
 };

@@ -3,7 +3,7 @@
 namespace candela {
 
 const std::vector<std::string>& strategyPresetNames() {
-  static const std::vector<std::string> names{"conventional", "emission"};
+  static const std::vector<std::string> names{"conventional", "emission", "full", "equiangular"};
   return names;
 }
 
@@ -11,12 +11,16 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
   StrategySettings s;
   s.preset = name;
   if (name == "conventional") return s;  // METHOD.md section 2, "conventional": the baseline
-  if (name == "emission") {
+  if (name == "emission" || name == "full" || name == "equiangular") {
     // Talk s.2.1: emission-aware majorant + emission at every collision + NEE toward emissive volumes.
     s.majorant.emission_term = true;
     s.majorant.emission_weight = 10.0f;  // the efficiency sweet spot measured on fire and torch-in-mist
     s.emission.gather_every_collision = true;
     s.emission.light_sampling = true;
+    // Talk s.2.2: plus probe-guided distance sampling with MIS (the talk's Fig. 1 right), or the
+    // equi-angular baseline in the same MIS slot.
+    if (name == "full") s.guiding.guide = DistanceGuide::Probes;
+    if (name == "equiangular") s.guiding.guide = DistanceGuide::EquiAngular;
     return s;
   }
   std::string known;

@@ -61,17 +61,67 @@ struct EmissionSettings {
   }
 };
 
+enum class DistanceGuide { None, Probes, EquiAngular };
+template <>
+struct EnumNames<DistanceGuide> {
+  static const std::vector<std::pair<DistanceGuide, const char*>>& get() {
+    static const std::vector<std::pair<DistanceGuide, const char*>> v{
+        {DistanceGuide::None, "none"}, {DistanceGuide::Probes, "probes"}, {DistanceGuide::EquiAngular, "equiangular"}};
+    return v;
+  }
+};
+
+enum class GuideCombination { Balance, Power, Average, GuidedOnly };
+template <>
+struct EnumNames<GuideCombination> {
+  static const std::vector<std::pair<GuideCombination, const char*>>& get() {
+    static const std::vector<std::pair<GuideCombination, const char*>> v{{GuideCombination::Balance, "balance"},
+                                                                        {GuideCombination::Power, "power"},
+                                                                        {GuideCombination::Average, "average"},
+                                                                        {GuideCombination::GuidedOnly, "guided_only"}};
+    return v;
+  }
+};
+
+// Scattering (distance) sampling, talk s.2.2 and METHOD.md s.4: a guided distance sample per ray,
+// combined with the tracked (transmittance-based) sample by MIS (Miller et al. 2019).
+struct GuidingSettings {
+  DistanceGuide guide = DistanceGuide::None;
+  GuideCombination combination = GuideCombination::Balance;  // MIS heuristic, or MIS off
+  int guided_segments = 1;        // 1: camera rays; 2: also the rays leaving the first vertex
+  float floor = 0.1f;             // uniform share of the piecewise-linear density (full support)
+  float probe_spacing = 0.0f;     // world units between probes; 0: 1/20 of the media's extent
+  float probe_radius = 1.0f;      // radius of influence, in units of the spacing
+  int probe_samples = 32;         // light samples per probe when learning
+  float probe_budget_s = 5.0f;    // learning stops at this many seconds (probes not reached are dropped)
+
+  template <class V>
+  void visit(V& v) {
+    v.field("guide", guide, "Guided distance sampler: none, probes (talk 2.2) or equiangular (Kulla and Fajardo 2012)");
+    v.field("combination", combination,
+            "How the guided and tracked samples combine: balance or power heuristic MIS, average (MIS off), guided_only");
+    v.field("guided_segments", guided_segments, "Path segments that get a guided sample: 1 camera rays, 2 also the rays from the first vertex", Range{1, 64});
+    v.field("floor", floor, "Uniform share of the guided density, so its support is complete", Range{1e-4, 1.0});
+    v.field("probe_spacing", probe_spacing, "World units between probes (0: automatic, 1/20 of the media's extent)", Range{0.0, 1e6});
+    v.field("probe_radius", probe_radius, "Probe radius of influence, in units of the spacing", Range{0.05, 10.0});
+    v.field("probe_samples", probe_samples, "Light samples per probe when learning", Range{1, 1 << 20});
+    v.field("probe_budget_s", probe_budget_s, "Time budget for learning probes (seconds)", Range{0.01, 3600.0});
+  }
+};
+
 struct StrategySettings {
   std::string preset = "conventional";
   MajorantPolicy majorant;
   EmissionSettings emission;
+  GuidingSettings guiding;
   int russian_roulette_depth = 3;  // scattering events before Russian roulette may end a path
 
   template <class V>
   void visit(V& v) {
-    v.field("preset", preset, "Named starting point for the settings below (conventional, emission)");
+    v.field("preset", preset, "Named starting point for the settings below (conventional, emission, full, equiangular)");
     v.object("majorant", majorant, "How the majorant (the collision rate of null-collision tracking) is built");
     v.object("emission", emission, "Emission sampling: gathering at every collision and emissive volumes as lights");
+    v.object("guiding", guiding, "Scattering distance sampling: probe guiding or equi-angular, with MIS");
     v.field("russian_roulette_depth", russian_roulette_depth, "Scattering events before Russian roulette may end a path (unbiased)", Range{0, 100000});
   }
 };

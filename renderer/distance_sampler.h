@@ -1,0 +1,59 @@
+// Guided distance sampling along a ray's medium interval [t0, t1] (talk s.2.2; METHOD.md s.4).
+// - Piecewise-linear: knots (t_k, s_k) from the probes a ray crosses define a piecewise-linear
+//   density (flat beyond the first and last knot), mixed with a uniform floor so the support is
+//   complete: p(t) = floor / (t1 - t0) + (1 - floor) * lin(t) / integral(lin). No knots: uniform.
+// - Equi-angular (Kulla and Fajardo 2012): for a point c at distance D from the ray, whose
+//   projection is at t = delta, p(t) = D / ((theta1 - theta0) (D^2 + (t - delta)^2)); a mixture over
+//   several points weighted by light power.
+// Both sample t by inverting their CDF and evaluate their pdf at any t (for MIS).
+#pragma once
+
+#include "core.h"
+
+#include <vector>
+
+namespace candela {
+
+struct DistanceKnot {
+  float t = 0.0f;
+  float value = 0.0f;
+};
+
+class PiecewiseLinearDistance {
+ public:
+  // Knots may be unsorted (they are sorted here) and may lie outside [t0, t1] (clamped).
+  void build(float t0, float t1, std::vector<DistanceKnot>& knots, float floor);
+  float sample(float u, float& pdf) const;
+  float pdf(float t) const;
+  float t0() const { return t0_; }
+  float t1() const { return t1_; }
+
+ private:
+  float linear(float t) const;
+  float t0_ = 0.0f, t1_ = 1.0f;
+  float uniformShare_ = 1.0f;  // floor (1 when there is nothing to follow)
+  std::vector<float> ts_, vs_, cdf_;  // segment ends, values at them, cumulative area
+  float area_ = 0.0f;
+};
+
+struct EquiAngularTarget {
+  Vec3 point{0.0f};
+  float weight = 1.0f;  // selection weight (light power)
+};
+
+class EquiAngularDistance {
+ public:
+  // Targets with weight > 0; an empty list gives the uniform density.
+  void build(const Ray& ray, float t0, float t1, const std::vector<EquiAngularTarget>& targets);
+  float sample(float u, float& pdf) const;
+  float pdf(float t) const;
+
+ private:
+  struct Lobe {
+    float delta, d, theta0, theta1, weight;
+  };
+  float t0_ = 0.0f, t1_ = 1.0f;
+  std::vector<Lobe> lobes_;
+};
+
+}  // namespace candela
