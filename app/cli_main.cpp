@@ -144,6 +144,12 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     }
     SceneDesc desc = sceneWith(scenePath, strategy, runSets);
     auto scene = buildScene(desc);
+    std::string note;
+    if (auto probes = scene->probes()) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%zu probes, %.2f s", probes->probes().size(), probes->learnSeconds());
+      note = buf;
+    }
     if (reference.width != scene->camera().width() || reference.height != scene->camera().height())
       throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
                        ", expected the scene's " + std::to_string(scene->camera().width()) + "x" + std::to_string(scene->camera().height()));
@@ -164,7 +170,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
                   p.mse, p.relmse);
       std::fflush(stdout);
       if (budget == times.back() && !sweepKey.empty())
-        sweepPoints.push_back({strategy, std::stod(value), 1.0 / (p.relmse * p.seconds)});
+        sweepPoints.push_back({strategy, std::stod(value), 1.0 / (p.relmse * p.seconds), note});
     }
   }
   const std::string csv = (std::filesystem::path(outDir) / "convergence.csv").string();
@@ -178,8 +184,8 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     const std::string sweepSvg = (std::filesystem::path(outDir) / "sweep.svg").string();
     std::ofstream out(sweepCsv);
     out << "# efficiency = 1 / (relmse x time_s) at the largest budget; " << kRelMseFormula << "\n";
-    out << "strategy," << sweepKey << ",efficiency\n";
-    for (const auto& p : sweepPoints) out << p.strategy << ',' << p.value << ',' << p.efficiency << '\n';
+    out << "strategy," << sweepKey << ",efficiency,note\n";
+    for (const auto& p : sweepPoints) out << p.strategy << ',' << p.value << ',' << p.efficiency << ",\"" << p.note << "\"\n";
     writeSweepSvg(sweepSvg, sweepPoints, std::filesystem::path(scenePath).stem().string() + ": efficiency versus " + sweepKey, sweepKey);
     std::printf("wrote %s and %s\n", sweepCsv.c_str(), sweepSvg.c_str());
   }

@@ -194,6 +194,9 @@ void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& point
     for (auto* p : pts) {
       if (p->value > 0.0) {
         s << "<circle cx='" << X(p->value) << "' cy='" << Y(p->efficiency) << "' r='3.5' fill='" << c << "'/>\n";
+        if (!p->note.empty())
+          s << "<text x='" << X(p->value) + 6 << "' y='" << Y(p->efficiency) - 8 << "' font-size='10' fill='" << c << "'>" << p->note
+            << "</text>\n";
       } else {
         s << "<line x1='" << L << "' y1='" << Y(p->efficiency) << "' x2='" << W - R << "' y2='" << Y(p->efficiency) << "' stroke='" << c
           << "' stroke-dasharray='6,4'/><text x='" << L + 6 << "' y='" << Y(p->efficiency) - 5 << "' fill='" << c << "'>" << xLabel

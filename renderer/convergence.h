@@ -44,6 +44,7 @@ struct SweepPoint {
   std::string strategy;
   double value = 0.0;
   double efficiency = 0.0;
+  std::string note;  // drawn beside the point (e.g. probe count and learning time)
 };
 void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, const std::string& title, const std::string& xLabel);
 

@@ -13,7 +13,9 @@ void PiecewiseLinearDistance::build(float t0, float t1, std::vector<DistanceKnot
   area_ = 0.0f;
   uniformShare_ = 1.0f;
   for (auto& k : knots) k.t = std::clamp(k.t, t0_, t1_);
-  std::sort(knots.begin(), knots.end(), [](const DistanceKnot& a, const DistanceKnot& b) { return a.t < b.t; });
+  // Knots arrive nearly sorted (gathered along the ray): insertion sort is close to linear.
+  for (size_t i = 1; i < knots.size(); ++i)
+    for (size_t j = i; j > 0 && knots[j].t < knots[j - 1].t; --j) std::swap(knots[j], knots[j - 1]);
   if (knots.empty()) return;
   // Segment ends: t0, the knots, t1; flat beyond the outer knots.
   ts_.push_back(t0_);

@@ -170,7 +170,7 @@ Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
   return trace(state, rng);
 }
 
-bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng) const {
+bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability) const {
   const Scene& s = scene_;
   if (st.vertices >= s.render().max_depth) return false;
   ++st.vertices;
@@ -181,6 +181,10 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
     // After the last vertex only volume emission that no light sampler covers is still missing.
     if (!s.hasEmissiveMedia() || !s.volumeLights().empty()) return false;
     st.lightsTaken = true;
+  }
+  if (continueProbability < 1.0f) {
+    if (rng.uniform() >= continueProbability) return false;
+    st.beta /= continueProbability;
   }
   if (st.vertices >= s.strategy().russian_roulette_depth) {
     const float q = std::min(1.0f, maxComponent(st.beta));
@@ -239,8 +243,11 @@ Rgb PathTracer::guidedSample(const PathState& st, float tIn, float tOut, Rng& rn
   if (!(sigmaS > 0.0f)) return Rgb(0.0f);
   const float sigmaN = std::max(0.0f, muBar - sigmaT);
   const float scatterDensity = gather ? muBar * sigmaS / (sigmaS + sigmaN) : sigmaS;
+  // The vertex's NEE always uses its MIS-weighted throughput k = w_g T_hat mu_s / p_g (that is where
+  // guiding pays off in thin media); only the continuation is rouletted, with probability min(1, k).
   const float weight = guidedWeight(nullProbability * scatterDensity / pdf);
-  if (!(weight > 0.0f)) return Rgb(0.0f);
+  const float k = weight * ratio * sigmaS / pdf;
+  if (!(k > 0.0f)) return Rgb(0.0f);
   float pick = rng.uniform() * sigmaS;
   size_t chosen = media.size() - 1;
   for (size_t i = 0; i < media.size(); ++i) {
@@ -252,9 +259,9 @@ Rgb PathTracer::guidedSample(const PathState& st, float tIn, float tOut, Rng& rn
   }
   const Medium& m = *media[chosen];
   PathState g = st;
-  g.beta = st.beta * (ratio * sigmaS / pdf * weight) * (m.albedo() / m.albedoAverage());
+  g.beta = st.beta * k * (m.albedo() / m.albedoAverage());
   Rgb L(0.0f);
-  if (scatterVertex(g, p, m.g(), L, rng)) L += trace(g, rng);
+  if (scatterVertex(g, p, m.g(), L, rng, std::min(1.0f, k))) L += trace(g, rng);
   return L;
 }
 
@@ -300,6 +307,7 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     float nullProbability = 1.0f;  // prod of P_null over this walk's null collisions (for MIS)
     float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering
     float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather mode)
+    float trackedWeight = 1.0f;    // MIS weight of the tracked scattering on a guided segment
     trackCollisions(s.media(), ray, tEnd, rng, [&](const Collision& c) {
       float sigmaA = 0.0f, sigmaS = 0.0f;
       for (int i = 0; i < c.count; ++i) {
@@ -379,15 +387,19 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     if (guided) {
       // MIS weight of the tracked scattering, then the guided sample from the segment's start.
       if (event == Event::Scattered) {
+        // The tracked vertex's NEE carries its MIS weight w_t; its continuation survives with
+        // probability w_t (then unweighted). With the guided vertex doing likewise, a guided segment
+        // continues about one path on average instead of two.
         const float pg = guide.pdf(scatterT);
-        st.beta *= pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
+        trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
+        st.beta *= trackedWeight;
       }
       L += guidedSample(segmentStart, tIn, tOut, rng);
     }
     if (event == Event::Absorbed) break;
 
     if (event == Event::Scattered) {
-      if (isBlack(st.beta) || !scatterVertex(st, scatterPos, scatterG, L, rng)) break;
+      if (isBlack(st.beta) || !scatterVertex(st, scatterPos, scatterG, L, rng, trackedWeight)) break;
       continue;
     }
 

@@ -58,8 +58,9 @@ class PathTracer {
   // Follows a path from its current ray to the end; returns the radiance it gathers.
   Rgb trace(PathState state, Rng& rng) const;
   // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
-  // false when the path ends there.
-  bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng) const;
+  // false when the path ends there. The continuation (not the NEE) survives with probability
+  // `continueProbability` first (used to spend about one continuation per guided segment).
+  bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f) const;
   // The guided distance sample of one ray segment and the path continuing from it (METHOD.md s.4).
   Rgb guidedSample(const PathState& state, float tIn, float tOut, Rng& rng) const;
   // The guided distance density for a ray over [tIn, tOut].

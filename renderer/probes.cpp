@@ -108,26 +108,30 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
   });
   for (size_t i = 0; i < centers.size(); ++i)
     if (weights[i] >= 0.0f && std::isfinite(weights[i])) set->probes_.push_back({centers[i], weights[i]});
-  set->buildLookup();
+  set->buildLookup(lo);
   set->seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
   return set;
 }
 
-void ProbeSet::buildLookup() {
+void ProbeSet::buildLookup(const Vec3& latticeOrigin) {
   cellStart_.clear();
   cellProbes_.clear();
   if (probes_.empty()) return;
+  // Lookup cells coincide with the probe lattice's cells (shifted to cover the spheres), so with a
+  // radius of at most half the spacing each probe lives in exactly one cell: its own.
   Vec3 lo(kInfinity), hi(-kInfinity);
   for (const auto& p : probes_) lo = glm::min(lo, p.center), hi = glm::max(hi, p.center);
-  lo -= radius_;
+  lo = latticeOrigin + glm::floor((lo - radius_ - latticeOrigin) / spacing_) * spacing_;
   hi += radius_;
   lookup_.origin = lo;
   lookup_.cellExtent = Vec3(spacing_);
   lookup_.res = glm::max(glm::ivec3(glm::ceil((hi - lo) / spacing_)), glm::ivec3(1));
   std::vector<std::vector<uint32_t>> lists(lookup_.cellCount());
   for (uint32_t i = 0; i < probes_.size(); ++i) {
-    const glm::ivec3 a = glm::clamp(glm::ivec3(glm::floor((probes_[i].center - radius_ - lo) / spacing_)), glm::ivec3(0), lookup_.res - 1);
-    const glm::ivec3 b = glm::clamp(glm::ivec3(glm::floor((probes_[i].center + radius_ - lo) / spacing_)), glm::ivec3(0), lookup_.res - 1);
+    // Shrunk by a hair: a sphere touching a cell face at one point cannot be crossed there.
+    const float r = radius_ * (1.0f - 1e-4f);
+    const glm::ivec3 a = glm::clamp(glm::ivec3(glm::floor((probes_[i].center - r - lo) / spacing_)), glm::ivec3(0), lookup_.res - 1);
+    const glm::ivec3 b = glm::clamp(glm::ivec3(glm::floor((probes_[i].center + r - lo) / spacing_)), glm::ivec3(0), lookup_.res - 1);
     for (int z = a.z; z <= b.z; ++z)
       for (int y = a.y; y <= b.y; ++y)
         for (int x = a.x; x <= b.x; ++x) lists[static_cast<size_t>(lookup_.cellIndex(x, y, z))].push_back(i);

@@ -42,7 +42,7 @@ class ProbeSet {
   void gatherKnots(const Ray& ray, float t0, float t1, std::vector<DistanceKnot>& knots) const;
 
  private:
-  void buildLookup();
+  void buildLookup(const Vec3& latticeOrigin);
   std::vector<Probe> probes_;
   float radius_ = 0.0f, spacing_ = 0.0f;
   int placed_ = 0;

@@ -91,7 +91,7 @@ struct GuidingSettings {
   int guided_segments = 1;        // 1: camera rays; 2: also the rays leaving the first vertex
   float floor = 0.1f;             // uniform share of the piecewise-linear density (full support)
   float probe_spacing = 0.0f;     // world units between probes; 0: 1/20 of the media's extent
-  float probe_radius = 1.0f;      // radius of influence, in units of the spacing
+  float probe_radius = 0.5f;      // radius of influence, in units of the spacing (0.5: spheres inscribed in lattice cells)
   int probe_samples = 32;         // light samples per probe when learning
   float probe_budget_s = 5.0f;    // learning stops at this many seconds (probes not reached are dropped)
 
