@@ -14,6 +14,52 @@
 
 namespace candela {
 
+namespace {
+
+struct ChartBox {
+  double W, H, L, R, T, B;  // size and margins
+};
+
+// Decade grid lines (with minor lines), tick labels, the plot frame and axis titles of a log-log chart
+// whose axes span 10^x0..10^x1 and 10^y0..10^y1.
+void logLogFrame(std::ostringstream& s, const ChartBox& c, double x0, double x1, double y0, double y1, const std::string& xTitle,
+                 const std::string& yTitle) {
+  auto X = [&](double v) { return c.L + (std::log10(v) - x0) / (x1 - x0) * (c.W - c.L - c.R); };
+  auto Y = [&](double v) { return c.H - c.B - (std::log10(v) - y0) / (y1 - y0) * (c.H - c.T - c.B); };
+  for (double d = x0; d <= x1 + 1e-9; ++d) {
+    for (int m = 1; m < 10 && d + std::log10(m) <= x1 + 1e-9; ++m) {
+      const double x = X(std::pow(10.0, d) * m);
+      s << "<line x1='" << x << "' y1='" << c.T << "' x2='" << x << "' y2='" << c.H - c.B << "' stroke='" << (m == 1 ? "#bbb" : "#eee") << "'/>\n";
+    }
+    s << "<text x='" << X(std::pow(10.0, d)) << "' y='" << c.H - c.B + 18 << "' text-anchor='middle'>1e" << d << "</text>\n";
+  }
+  for (double d = y0; d <= y1 + 1e-9; ++d) {
+    for (int m = 1; m < 10 && d + std::log10(m) <= y1 + 1e-9; ++m) {
+      const double y = Y(std::pow(10.0, d) * m);
+      s << "<line x1='" << c.L << "' y1='" << y << "' x2='" << c.W - c.R << "' y2='" << y << "' stroke='" << (m == 1 ? "#bbb" : "#eee") << "'/>\n";
+    }
+    s << "<text x='" << c.L - 8 << "' y='" << Y(std::pow(10.0, d)) + 4 << "' text-anchor='end'>1e" << d << "</text>\n";
+  }
+  s << "<rect x='" << c.L << "' y='" << c.T << "' width='" << c.W - c.L - c.R << "' height='" << c.H - c.T - c.B
+    << "' fill='none' stroke='black'/>\n"
+    << "<text x='" << (c.L + c.W - c.R) / 2 << "' y='" << c.H - 18 << "' text-anchor='middle'>" << xTitle << "</text>\n"
+    << "<text transform='translate(20," << (c.T + c.H - c.B) / 2 << ") rotate(-90)' text-anchor='middle'>" << yTitle << "</text>\n";
+}
+
+void legendEntry(std::ostringstream& s, const ChartBox& c, int row, const char* color, const std::string& label) {
+  const double y = c.T + 20 + 22 * static_cast<double>(row);
+  s << "<line x1='" << c.W - c.R + 15 << "' y1='" << y << "' x2='" << c.W - c.R + 40 << "' y2='" << y << "' stroke='" << color
+    << "' stroke-width='3'/><text x='" << c.W - c.R + 46 << "' y='" << y + 4 << "'>" << label << "</text>\n";
+}
+
+void writeFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write");
+  out << text;
+}
+
+}  // namespace
+
 const char* const kRelMseFormula =
     "relmse = mean over pixels and channels of (I - R)^2 / (R^2 + eps) with eps = (0.1 * mean(R))^2; "
     "mse = mean over pixels and channels of (I - R)^2; I the render, R the reference";
@@ -110,23 +156,7 @@ void writeConvergenceSvg(const std::string& path, const std::vector<ConvergenceP
   s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' font-size='12'>\n"
     << "<rect width='100%' height='100%' fill='white'/>\n"
     << "<text x='" << W / 2 << "' y='24' text-anchor='middle' font-size='15'>" << title << "</text>\n";
-  for (double d = lt0; d <= lt1 + 1e-9; ++d) {
-    for (int m = 1; m < 10 && d + std::log10(m) <= lt1 + 1e-9; ++m) {
-      const double x = X(std::pow(10.0, d) * m);
-      s << "<line x1='" << x << "' y1='" << T << "' x2='" << x << "' y2='" << H - B << "' stroke='" << (m == 1 ? "#bbb" : "#eee") << "'/>\n";
-    }
-    s << "<text x='" << X(std::pow(10.0, d)) << "' y='" << H - B + 18 << "' text-anchor='middle'>" << std::pow(10.0, d) << "</text>\n";
-  }
-  for (double d = le0; d <= le1 + 1e-9; ++d) {
-    for (int m = 1; m < 10 && d + std::log10(m) <= le1 + 1e-9; ++m) {
-      const double y = Y(std::pow(10.0, d) * m);
-      s << "<line x1='" << L << "' y1='" << y << "' x2='" << W - R << "' y2='" << y << "' stroke='" << (m == 1 ? "#bbb" : "#eee") << "'/>\n";
-    }
-    s << "<text x='" << L - 8 << "' y='" << Y(std::pow(10.0, d)) + 4 << "' text-anchor='end'>1e" << d << "</text>\n";
-  }
-  s << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B << "' fill='none' stroke='black'/>\n"
-    << "<text x='" << (L + W - R) / 2 << "' y='" << H - 18 << "' text-anchor='middle'>render time (s, log)</text>\n"
-    << "<text transform='translate(20," << (T + H - B) / 2 << ") rotate(-90)' text-anchor='middle'>relMSE (log)</text>\n";
+  logLogFrame(s, {W, H, L, R, T, B}, lt0, lt1, le0, le1, "render time (s, log)", "relMSE (log)");
   for (size_t i = 0; i < order.size(); ++i) {
     auto& pts = series[order[i]];
     std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->seconds < b->seconds; });
@@ -135,19 +165,11 @@ void writeConvergenceSvg(const std::string& path, const std::vector<ConvergenceP
     for (auto* p : pts) s << X(p->seconds) << ',' << Y(p->relmse) << ' ';
     s << "'/>\n";
     for (auto* p : pts) s << "<circle cx='" << X(p->seconds) << "' cy='" << Y(p->relmse) << "' r='3.5' fill='" << c << "'/>\n";
-    const double ly = T + 20 + 22 * static_cast<double>(i);
-    s << "<line x1='" << W - R + 15 << "' y1='" << ly << "' x2='" << W - R + 40 << "' y2='" << ly << "' stroke='" << c
-      << "' stroke-width='3'/><text x='" << W - R + 46 << "' y='" << ly + 4 << "'>" << order[i] << "</text>\n";
+    legendEntry(s, {W, H, L, R, T, B}, static_cast<int>(i), c, order[i]);
   }
   s << "</svg>\n";
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write");
-  out << s.str();
+  writeFile(path, s.str());
 }
-
-}  // namespace candela
-
-namespace candela {
 
 void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, const std::string& title, const std::string& xLabel) {
   std::vector<std::string> order;
@@ -170,17 +192,7 @@ void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& point
   s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' font-size='12'>\n"
     << "<rect width='100%' height='100%' fill='white'/>\n"
     << "<text x='" << W / 2 << "' y='24' text-anchor='middle' font-size='15'>" << title << "</text>\n";
-  for (double d = lx0; d <= lx1 + 1e-9; ++d) {
-    s << "<line x1='" << X(std::pow(10.0, d)) << "' y1='" << T << "' x2='" << X(std::pow(10.0, d)) << "' y2='" << H - B << "' stroke='#ccc'/>\n";
-    s << "<text x='" << X(std::pow(10.0, d)) << "' y='" << H - B + 18 << "' text-anchor='middle'>1e" << d << "</text>\n";
-  }
-  for (double d = ly0; d <= ly1 + 1e-9; ++d) {
-    s << "<line x1='" << L << "' y1='" << Y(std::pow(10.0, d)) << "' x2='" << W - R << "' y2='" << Y(std::pow(10.0, d)) << "' stroke='#ccc'/>\n";
-    s << "<text x='" << L - 8 << "' y='" << Y(std::pow(10.0, d)) + 4 << "' text-anchor='end'>1e" << d << "</text>\n";
-  }
-  s << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B << "' fill='none' stroke='black'/>\n"
-    << "<text x='" << (L + W - R) / 2 << "' y='" << H - 18 << "' text-anchor='middle'>" << xLabel << " (log)</text>\n"
-    << "<text transform='translate(20," << (T + H - B) / 2 << ") rotate(-90)' text-anchor='middle'>efficiency 1/(relMSE x time) (log)</text>\n";
+  logLogFrame(s, {W, H, L, R, T, B}, lx0, lx1, ly0, ly1, xLabel + " (log)", "efficiency 1/(relMSE x time) (log)");
   for (size_t i = 0; i < order.size(); ++i) {
     const char* c = colors[i % 6];
     std::vector<const SweepPoint*> pts;
@@ -203,14 +215,10 @@ void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& point
           << " = 0</text>\n";
       }
     }
-    const double ly = T + 20 + 22 * static_cast<double>(i);
-    s << "<line x1='" << W - R + 15 << "' y1='" << ly << "' x2='" << W - R + 40 << "' y2='" << ly << "' stroke='" << c
-      << "' stroke-width='3'/><text x='" << W - R + 46 << "' y='" << ly + 4 << "'>" << order[i] << "</text>\n";
+    legendEntry(s, {W, H, L, R, T, B}, static_cast<int>(i), c, order[i]);
   }
   s << "</svg>\n";
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write");
-  out << s.str();
+  writeFile(path, s.str());
 }
 
 }  // namespace candela

@@ -10,13 +10,6 @@
 namespace candela {
 namespace {
 
-double chiSquareCritical(int dof, double p) {
-  const double z = normalTwoSidedThreshold(2.0 * p);
-  const double k = dof;
-  const double t = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
-  return k * t * t * t;
-}
-
 std::shared_ptr<Scene> torchOnly(const std::vector<std::string>& extra = {}) {
   std::vector<std::string> sets = {"strategy.preset=\"emission\"", "strategy.majorant.emission_term=true",
                                    "strategy.emission.light_sampling=true"};
@@ -84,8 +77,8 @@ void checkDirectionPdf(const EmissionLight& light, const Vec3& x, const Vec3& ax
   // its ~1% quadrature error on top of the sampling noise.
   double slack = 0.0;
   for (size_t i = 0; i < observed.size(); ++i) slack += std::pow(0.01 * expected[i] * drawn, 2.0) / std::max(1.0, expected[i] * drawn);
-  std::printf("chi2 %.1f dof %d critical %.1f slack %.1f total %.4f\n", chi2, dof, chiSquareCritical(dof, 1e-4), slack, total);
-  EXPECT_LT(chi2, chiSquareCritical(dof, 1e-4) + slack) << "dof " << dof;
+  std::printf("chi2 %.1f dof %d critical %.1f slack %.1f total %.4f\n", chi2, dof, test::chiSquareCritical(dof, 1e-4), slack, total);
+  EXPECT_LT(chi2, test::chiSquareCritical(dof, 1e-4) + slack) << "dof " << dof;
 }
 
 TEST(EmissionLight, DirectionPdfMatchesSamplesFromOutside) {

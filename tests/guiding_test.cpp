@@ -11,13 +11,6 @@
 namespace candela {
 namespace {
 
-double chiSquareCritical(int dof, double p) {
-  const double z = normalTwoSidedThreshold(2.0 * p);
-  const double k = dof;
-  const double t = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
-  return k * t * t * t;
-}
-
 // Histogram of `sample` over [t0, t1] against the integral of `pdf` per bin (Simpson's rule on a
 // fine grid); also checks that the returned pdf equals pdf(t) and integrates to 1.
 template <class Dist>
@@ -49,7 +42,7 @@ void checkDistance(const Dist& dist, float t0, float t1, uint64_t seed) {
     ++dof;
   }
   EXPECT_NEAR(total, 1.0, 2e-3);
-  EXPECT_LT(chi2, chiSquareCritical(std::max(dof, 1), 1e-4)) << "dof " << dof;
+  EXPECT_LT(chi2, test::chiSquareCritical(std::max(dof, 1), 1e-4)) << "dof " << dof;
 }
 
 TEST(PiecewiseLinear, MatchesItsPdfForManyKnots) {

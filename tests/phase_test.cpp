@@ -3,6 +3,7 @@
 #include "phase.h"
 #include "rng.h"
 #include "stats.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -11,15 +12,6 @@
 
 namespace candela {
 namespace {
-
-// Upper critical value of chi-square with `dof` degrees of freedom at tail probability p
-// (Wilson-Hilferty approximation).
-double chiSquareCritical(int dof, double p) {
-  const double z = normalTwoSidedThreshold(2.0 * p);
-  const double k = dof;
-  const double t = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
-  return k * t * t * t;
-}
 
 // P(cos theta <= c) for HG in this codebase's convention (integral of 2 pi hgPhase over [-1, c]).
 double hgCosineCdf(double c, double g) {
@@ -86,7 +78,7 @@ TEST_P(HgSampling, HistogramMatchesPdf) {
     ++dof;
   }
   EXPECT_NEAR(total, 1.0, 1e-9);
-  EXPECT_LT(chi2, chiSquareCritical(dof, 1e-4)) << "g = " << g << ", dof = " << dof;
+  EXPECT_LT(chi2, test::chiSquareCritical(dof, 1e-4)) << "g = " << g << ", dof = " << dof;
 }
 
 INSTANTIATE_TEST_SUITE_P(Anisotropies, HgSampling, ::testing::Values(-0.95f, -0.5f, 0.0f, 0.3f, 0.8f, 0.95f));

@@ -3,6 +3,9 @@
 
 #include "renderer.h"
 #include "scene.h"
+#include "stats.h"
+
+#include <cmath>
 
 #include <string>
 #include <vector>
@@ -13,6 +16,15 @@ inline std::string assetPath(const std::string& relative) { return std::string(C
 
 inline SceneDesc loadScene(const std::string& relative, const std::vector<std::string>& settings = {}) {
   return loadSceneDesc(assetPath(relative), settings);
+}
+
+// Upper critical value of chi-square with `dof` degrees of freedom at tail probability p
+// (Wilson-Hilferty approximation).
+inline double chiSquareCritical(int dof, double p) {
+  const double z = normalTwoSidedThreshold(2.0 * p);
+  const double k = dof;
+  const double t = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
+  return k * t * t * t;
 }
 
 inline Film render(const SceneDesc& desc, int spp, int threads = 0) {
