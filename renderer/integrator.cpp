@@ -74,6 +74,19 @@ bool PathTracer::mediumInterval(const Ray& ray, float tEnd, float& tIn, float& t
   return tIn < tOut;
 }
 
+float PathTracer::majorantOpticalDepth(const Ray& ray, float t0, float t1) const {
+  float depth = 0.0f;
+  for (const Medium* m : scene_.media().media) {
+    const Vec3 o = Vec3(m->indexFromWorld() * glm::vec4(ray.origin, 1.0f));
+    const Vec3 d = Vec3(m->indexFromWorld() * glm::vec4(ray.direction, 0.0f));
+    MajorantDda dda(m->majorantGrid(), o, d, t0, t1);
+    float a, b;
+    int cell;
+    while (dda.next(a, b, cell)) depth += m->majorantGrid().maxDensity(cell) * m->sigmaTScale() * (b - a);
+  }
+  return depth;
+}
+
 float PathTracer::guidedWeight(float r) const {
   switch (scene_.strategy().guiding.combination) {
     case GuideCombination::Balance: return 1.0f / (1.0f + r);
@@ -296,8 +309,12 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     // A guided distance sample for this segment (talk 2.2)? Its density must exist before the
     // tracked walk, whose scattering is weighted against it.
     float tIn = 0.0f, tOut = 0.0f;
+    // Thick rays are left to tracking, which scatters there reliably: the choice depends on the ray
+    // alone (never on the walk), so MIS stays valid with the tracked technique alone on them.
+    const float maxDepthTau = strategy.guiding.max_optical_depth;
     const bool guided = guiding && st.segment < strategy.guiding.guided_segments && !st.lightsTaken && st.vertices < maxDepth &&
-                        mediumInterval(ray, tEnd, tIn, tOut);
+                        mediumInterval(ray, tEnd, tIn, tOut) &&
+                        (maxDepthTau <= 0.0f || majorantOpticalDepth(ray, tIn, tOut) <= maxDepthTau);
     if (guided) buildGuide(ray, tIn, tOut, guide);
     const PathState segmentStart = st;
 

@@ -67,6 +67,8 @@ class PathTracer {
   void buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const;
   // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
   bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
+  // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
+  float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
   // MIS weight of the guided technique given r = p_tracked / p_guided.
   float guidedWeight(float r) const;
 

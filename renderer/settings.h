@@ -94,6 +94,7 @@ struct GuidingSettings {
   float probe_radius = 0.5f;      // radius of influence, in units of the spacing (0.5: spheres inscribed in lattice cells)
   int probe_samples = 32;         // light samples per probe when learning
   float probe_budget_s = 5.0f;    // learning stops at this many seconds (probes not reached are dropped)
+  float max_optical_depth = 4.0f; // skip guiding on rays thicker than this (majorant of mu_t); 0: never skip
 
   template <class V>
   void visit(V& v) {
@@ -106,6 +107,9 @@ struct GuidingSettings {
     v.field("probe_radius", probe_radius, "Probe radius of influence, in units of the spacing", Range{0.05, 10.0});
     v.field("probe_samples", probe_samples, "Light samples per probe when learning", Range{1, 1 << 20});
     v.field("probe_budget_s", probe_budget_s, "Time budget for learning probes (seconds)", Range{0.01, 3600.0});
+    v.field("max_optical_depth", max_optical_depth,
+            "Rays whose majorant optical depth exceeds this get no guided sample: tracking already scatters there (0: guide all)",
+            Range{0.0, 1e6});
   }
 };
 
