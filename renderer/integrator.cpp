@@ -219,9 +219,7 @@ namespace {
 thread_local GuideDensity tlsGuide;
 }  // namespace
 
-Rgb PathTracer::guidedSample(const PathState& st, float tIn, float tOut, Rng& rng) const {
-  (void)tIn;
-  (void)tOut;
+Rgb PathTracer::guidedSample(const PathState& st, Rng& rng) const {
   const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
   float pdf = 0.0f;
@@ -241,18 +239,8 @@ Rgb PathTracer::guidedSample(const PathState& st, float tIn, float tOut, Rng& rn
   if (!(ratio > 0.0f)) return Rgb(0.0f);
   // The scattering vertex at t.
   const Vec3 p = st.ray.at(t);
-  const auto& media = s.mediaOwned();
-  float share[kMaxMedia] = {};
-  float sigmaS = 0.0f, sigmaT = 0.0f, muBar = 0.0f;
-  for (size_t i = 0; i < media.size(); ++i) {
-    const Medium& m = *media[i];
-    const Vec3 idx = Vec3(m.indexFromWorld() * glm::vec4(p, 1.0f));
-    const float sigmaTi = Medium::Sampler(m).sigmaT(idx);
-    share[i] = sigmaTi * m.albedoAverage();
-    sigmaS += share[i];
-    sigmaT += sigmaTi;
-    muBar += m.majorantAt(idx);
-  }
+  const Scene::PointCoefficients c = s.coefficientsAt(p);
+  const float sigmaS = c.sigmaS, sigmaT = c.sigmaT, muBar = c.muBar;
   if (!(sigmaS > 0.0f)) return Rgb(0.0f);
   const float sigmaN = std::max(0.0f, muBar - sigmaT);
   const float scatterDensity = gather ? muBar * sigmaS / (sigmaS + sigmaN) : sigmaS;
@@ -261,16 +249,7 @@ Rgb PathTracer::guidedSample(const PathState& st, float tIn, float tOut, Rng& rn
   const float weight = guidedWeight(nullProbability * scatterDensity / pdf);
   const float k = weight * ratio * sigmaS / pdf;
   if (!(k > 0.0f)) return Rgb(0.0f);
-  float pick = rng.uniform() * sigmaS;
-  size_t chosen = media.size() - 1;
-  for (size_t i = 0; i < media.size(); ++i) {
-    if (pick < share[i]) {
-      chosen = i;
-      break;
-    }
-    pick -= share[i];
-  }
-  const Medium& m = *media[chosen];
+  const Medium& m = c.pick(s, rng.uniform());
   PathState g = st;
   g.beta = st.beta * k * (m.albedo() / m.albedoAverage());
   Rgb L(0.0f);
@@ -411,7 +390,7 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
         trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
         st.beta *= trackedWeight;
       }
-      L += guidedSample(segmentStart, tIn, tOut, rng);
+      L += guidedSample(segmentStart, rng);
     }
     if (event == Event::Absorbed) break;
 

@@ -62,7 +62,8 @@ class PathTracer {
   // `continueProbability` first (used to spend about one continuation per guided segment).
   bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f) const;
   // The guided distance sample of one ray segment and the path continuing from it (METHOD.md s.4).
-  Rgb guidedSample(const PathState& state, float tIn, float tOut, Rng& rng) const;
+  // It samples the density built for this segment (tlsGuide in integrator.cpp).
+  Rgb guidedSample(const PathState& state, Rng& rng) const;
   // The guided distance density for a ray over [tIn, tOut].
   void buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const;
   // The part of [0, tEnd] where some medium may be non-zero; false when there is none.

@@ -12,30 +12,6 @@ namespace candela {
 
 namespace {
 
-// Sum over media of mu_s (albedo average) at a world point, and the HG g of the medium chosen by
-// its share of mu_s (u picks it).
-float scatteringAt(const Scene& scene, const Vec3& p, float u, float& g) {
-  float total = 0.0f;
-  float share[kMaxMedia] = {};
-  const auto& media = scene.mediaOwned();
-  for (size_t i = 0; i < media.size(); ++i) {
-    const Medium& m = *media[i];
-    const Vec3 idx = Vec3(m.indexFromWorld() * glm::vec4(p, 1.0f));
-    share[i] = Medium::Sampler(m).sigmaT(idx) * m.albedoAverage();
-    total += share[i];
-  }
-  g = 0.0f;
-  float pick = u * total;
-  for (size_t i = 0; i < media.size(); ++i) {
-    if (pick < share[i]) {
-      g = media[i]->g();
-      break;
-    }
-    pick -= share[i];
-  }
-  return total;
-}
-
 // Can any medium scatter near p (within r)? Checks the majorant cells at p and 6 points around it.
 bool mayScatterNear(const Scene& scene, const Vec3& p, float r) {
   static const Vec3 offsets[7] = {{0, 0, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
@@ -96,13 +72,13 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
         y = Vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0f - 1.0f;
       } while (glm::dot(y, y) > 1.0f);
       y = centers[i] + y * set->radius_;
-      float g;
-      const float sigmaS = scatteringAt(scene, y, rng.uniform(), g);
-      if (!(sigmaS > 0.0f)) continue;
+      const Scene::PointCoefficients c = scene.coefficientsAt(y);
+      if (!(c.sigmaS > 0.0f)) continue;
+      const float g = c.pick(scene, rng.uniform()).g();
       const Vec3 toCamera = camera - y;
       const float dist = glm::length(toCamera);
       if (!(dist > 0.0f)) continue;
-      sum += sigmaS * luminance(tracer.inScattered(y, toCamera / dist, g, rng));
+      sum += c.sigmaS * luminance(tracer.inScattered(y, toCamera / dist, g, rng));
     }
     weights[i] = static_cast<float>(sum / settings.probe_samples);
   });

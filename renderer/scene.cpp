@@ -105,6 +105,30 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
   return scene;
 }
 
+Scene::PointCoefficients Scene::coefficientsAt(const Vec3& p) const {
+  PointCoefficients c;
+  for (size_t i = 0; i < media_.size(); ++i) {
+    const Medium& m = *media_[i];
+    const Vec3 idx = Vec3(m.indexFromWorld() * glm::vec4(p, 1.0f));
+    const float sigmaT = Medium::Sampler(m).sigmaT(idx);
+    c.shares[i] = sigmaT * m.albedoAverage();
+    c.sigmaS += c.shares[i];
+    c.sigmaT += sigmaT;
+    c.muBar += m.majorantAt(idx);
+  }
+  return c;
+}
+
+const Medium& Scene::PointCoefficients::pick(const Scene& scene, float u) const {
+  const auto& media = scene.mediaOwned();
+  float x = u * sigmaS;
+  for (size_t i = 0; i < media.size(); ++i) {
+    if (x < shares[i]) return *media[i];
+    x -= shares[i];
+  }
+  return *media.back();
+}
+
 void Scene::setStrategy(const StrategySettings& strategy) {
   cancelProbes_ = true;  // a background relearn reads the media being changed here
   waitForProbes();

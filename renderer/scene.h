@@ -52,6 +52,16 @@ class Scene {
   float radius() const { return radius_; }
   Vec3 center() const { return center_; }
 
+  // Coefficients of all media at a world point (outside the hot tracking loop: probes and guided
+  // vertices). shares[i] is medium i's mu_s (albedo average); returns their sum.
+  struct PointCoefficients {
+    float sigmaS = 0.0f, sigmaT = 0.0f, muBar = 0.0f;
+    float shares[kMaxMedia] = {};
+    // The medium chosen by its share of mu_s for u in [0, 1).
+    const Medium& pick(const Scene& scene, float u) const;
+  };
+  PointCoefficients coefficientsAt(const Vec3& p) const;
+
   // Applies new strategy settings, rebuilding only what depends on them (majorants, emission
   // grids, light selection; probes are learned when probe guiding turns on or its settings change).
   void setStrategy(const StrategySettings& strategy);
