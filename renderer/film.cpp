@@ -16,8 +16,6 @@ void Film::resize(int width, int height) {
   rejected_ = 0;
 }
 
-void Film::clear() { resize(width_, height_); }
-
 Rgb Film::mean(int x, int y) const {
   if (spp_ == 0) return Rgb(0.0f);
   const size_t i = 3 * (static_cast<size_t>(y) * width_ + x);

@@ -15,7 +15,6 @@ class Film {
   Film() = default;
   Film(int width, int height) { resize(width, height); }
   void resize(int width, int height);
-  void clear();
 
   int width() const { return width_; }
   int height() const { return height_; }

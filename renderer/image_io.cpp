@@ -106,21 +106,6 @@ void writePng(const std::string& path, const Image& image, float exposureStops) 
   png_destroy_write_struct(&png, &info);
 }
 
-Image readPng(const std::string& path) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&img, path.c_str())) throw std::runtime_error(path + ": cannot read PNG (" + img.message + ")");
-  img.format = PNG_FORMAT_RGB;
-  std::vector<png_byte> bytes(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, bytes.data(), 0, nullptr)) throw std::runtime_error(path + ": cannot read PNG");
-  Image out;
-  out.width = static_cast<int>(img.width);
-  out.height = static_cast<int>(img.height);
-  out.rgb.resize(bytes.size());
-  for (size_t i = 0; i < bytes.size(); ++i) out.rgb[i] = bytes[i] / 255.0f;
-  return out;
-}
-
 void writeImage(const std::string& path, const Image& image) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);

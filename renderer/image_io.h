@@ -18,8 +18,6 @@ void writeExr(const std::string& path, const Image& image);
 Image readExr(const std::string& path);
 // Applies exposure (stops) and the sRGB transfer function, clamps, writes 8-bit RGB.
 void writePng(const std::string& path, const Image& image, float exposureStops = 0.0f);
-// Reads an 8-bit PNG as display values in [0, 1] (for tests and figures).
-Image readPng(const std::string& path);
 // Writes by extension: .exr or .png. Throws std::runtime_error on other extensions or I/O errors.
 void writeImage(const std::string& path, const Image& image);
 

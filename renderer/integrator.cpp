@@ -295,7 +295,8 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
                         mediumInterval(ray, tEnd, tIn, tOut) &&
                         (maxDepthTau <= 0.0f || majorantOpticalDepth(ray, tIn, tOut) <= maxDepthTau);
     if (guided) buildGuide(ray, tIn, tOut, guide);
-    const PathState segmentStart = st;
+    PathState segmentStart;  // the guided sample starts from the segment's start, before the walk
+    if (guided) segmentStart = st;
 
     enum class Event { None, Absorbed, Scattered } event = Event::None;
     Vec3 scatterPos(0.0f);
