@@ -33,10 +33,7 @@ std::vector<std::string> splitList(const std::string& s) {
 
 // The scene document with a strategy preset (if any) and the --set edits applied, validated.
 SceneDesc sceneWith(const std::string& path, const std::string& preset, const std::vector<std::string>& sets) {
-  Json doc = readSceneJson(path);
-  if (!preset.empty()) doc["strategy"] = Json{{"preset", preset}};
-  for (const auto& s : sets) applySetting(doc, s, path + " (--set " + s + ")");
-  return parseSceneDesc(doc, path);
+  return loadSceneDesc(path, sets, preset);
 }
 
 std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {

@@ -69,7 +69,9 @@ Image readExr(const std::string& path) {
   return image;
 }
 
-void writePng(const std::string& path, const Image& image, float exposureStops) {
+void writeDisplayPng(const std::string& path, const DisplayImage& image) {
+  if (image.rgb8.size() != 3 * static_cast<size_t>(image.width) * static_cast<size_t>(image.height))
+    throw std::runtime_error(path + ": PNG pixel buffer does not match its size");
   std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(path.c_str(), "wb"), &std::fclose);
   if (!fp) throw std::runtime_error(path + ": cannot open for writing");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
@@ -87,7 +89,7 @@ void writePng(const std::string& path, const Image& image, float exposureStops) 
   size_t ki = 0;
   for (const auto& [k, v] : image.metadata) {
     png_text t{};
-    t.compression = PNG_TEXT_COMPRESSION_NONE;
+    t.compression = v.size() > 1000 ? PNG_TEXT_COMPRESSION_zTXt : PNG_TEXT_COMPRESSION_NONE;
     t.key = const_cast<char*>(keys[ki++].c_str());
     t.text = const_cast<char*>(v.c_str());
     t.text_length = v.size();
@@ -95,15 +97,56 @@ void writePng(const std::string& path, const Image& image, float exposureStops) 
   }
   if (!texts.empty()) png_set_text(png, info, texts.data(), static_cast<int>(texts.size()));
   png_write_info(png, info);
-  const float gain = std::exp2(exposureStops);
-  std::vector<png_byte> row(3 * static_cast<size_t>(image.width));
-  for (int y = 0; y < image.height; ++y) {
-    for (int i = 0; i < 3 * image.width; ++i)
-      row[static_cast<size_t>(i)] = static_cast<png_byte>(std::lround(255.0f * srgbEncode(image.rgb[3 * static_cast<size_t>(y) * image.width + i] * gain)));
-    png_write_row(png, row.data());
-  }
+  for (int y = 0; y < image.height; ++y)
+    png_write_row(png, const_cast<png_byte*>(image.rgb8.data() + 3 * static_cast<size_t>(y) * image.width));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
+}
+
+DisplayImage readDisplayPng(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!fp) throw std::runtime_error(path + ": cannot open the PNG");
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw std::runtime_error(path + ": not a readable PNG");
+  }
+  png_init_io(png, fp.get());
+  png_read_info(png, info);
+  // Whatever the file holds, read 8-bit RGB.
+  png_set_strip_16(png);
+  png_set_strip_alpha(png);
+  png_set_palette_to_rgb(png);
+  png_set_gray_to_rgb(png);
+  png_read_update_info(png, info);
+  DisplayImage image;
+  image.width = static_cast<int>(png_get_image_width(png, info));
+  image.height = static_cast<int>(png_get_image_height(png, info));
+  image.rgb8.resize(3 * static_cast<size_t>(image.width) * image.height);
+  for (int y = 0; y < image.height; ++y) png_read_row(png, image.rgb8.data() + 3 * static_cast<size_t>(y) * image.width, nullptr);
+  png_read_end(png, info);
+  png_textp texts = nullptr;
+  int count = 0;
+  png_get_text(png, info, &texts, &count);
+  for (int i = 0; i < count; ++i) {
+    const std::string key = texts[i].key;
+    if (key.rfind("candela:", 0) == 0) image.metadata[key.substr(8)] = std::string(texts[i].text, texts[i].text_length);
+  }
+  png_destroy_read_struct(&png, &info, nullptr);
+  return image;
+}
+
+void writePng(const std::string& path, const Image& image, float exposureStops) {
+  DisplayImage display;
+  display.width = image.width;
+  display.height = image.height;
+  display.metadata = image.metadata;
+  display.rgb8.resize(image.rgb.size());
+  const float gain = std::exp2(exposureStops);
+  for (size_t i = 0; i < image.rgb.size(); ++i)
+    display.rgb8[i] = static_cast<uint8_t>(std::lround(255.0f * srgbEncode(image.rgb[i] * gain)));
+  writeDisplayPng(path, display);
 }
 
 void writeImage(const std::string& path, const Image& image) {

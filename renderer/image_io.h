@@ -2,6 +2,7 @@
 // carrying string metadata (scene path, settings JSON, spp, time).
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -14,10 +15,20 @@ struct Image {
   std::map<std::string, std::string> metadata;
 };
 
+// An 8-bit display-referred image (what a display transform produced), as the viewer's screenshots hold.
+struct DisplayImage {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgb8;  // interleaved, top row first
+  std::map<std::string, std::string> metadata;
+};
+
 void writeExr(const std::string& path, const Image& image);
 Image readExr(const std::string& path);
 // Applies exposure (stops) and the sRGB transfer function, clamps, writes 8-bit RGB.
 void writePng(const std::string& path, const Image& image, float exposureStops = 0.0f);
+// Writes / reads display-referred 8-bit RGB PNGs; metadata travels as "candela:KEY" text chunks.
+void writeDisplayPng(const std::string& path, const DisplayImage& image);
+DisplayImage readDisplayPng(const std::string& path);
 // Writes by extension: .exr or .png. Throws std::runtime_error on other extensions or I/O errors.
 void writeImage(const std::string& path, const Image& image);
 

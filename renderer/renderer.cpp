@@ -12,8 +12,8 @@ namespace candela {
 ProgressiveRenderer::ProgressiveRenderer(std::shared_ptr<const Scene> scene, RenderOptions options)
     : scene_(std::move(scene)), options_(options) {}
 
-bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool>* cancel) {
-  const Camera& camera = scene_->camera();
+bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool>* cancel, const Camera* cameraOverride) {
+  const Camera& camera = cameraOverride ? *cameraOverride : scene_->camera();
   const int w = camera.width(), h = camera.height();
   if (film.width() != w || film.height() != h) film.resize(w, h);
   Film pass(w, h);

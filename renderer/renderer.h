@@ -24,8 +24,9 @@ class ProgressiveRenderer {
   ProgressiveRenderer(std::shared_ptr<const Scene> scene, RenderOptions options = {});
 
   // Renders `spp` more samples per pixel into `film` (resized to the camera if needed). Returns
-  // false, leaving `film` unchanged, if `cancel` became true during the pass.
-  bool renderPass(Film& film, int spp, const std::atomic<bool>* cancel = nullptr);
+  // false, leaving `film` unchanged, if `cancel` became true during the pass. `camera` overrides the
+  // scene's camera (the viewer's low-resolution preview after an edit uses the same view, fewer pixels).
+  bool renderPass(Film& film, int spp, const std::atomic<bool>* cancel = nullptr, const Camera* camera = nullptr);
 
   // Renders until `spp` samples per pixel or, when `seconds` > 0, until the clock runs out (the
   // unfinished pass is discarded). Returns the seconds spent.

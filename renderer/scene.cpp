@@ -3,7 +3,9 @@
 #include "procedural.h"
 #include "vdb_io.h"
 
+#include <deque>
 #include <filesystem>
+#include <mutex>
 
 namespace candela {
 
@@ -23,6 +25,31 @@ Ray Camera::generate(float x, float y) const {
 }
 
 Scene::Scene(const SceneDesc& desc) : desc_(desc), camera_(desc.camera) {}
+
+namespace {
+
+// Grids loaded recently, keyed by file, grid names and modification time. Live edits of a volume's
+// parameters rebuild the scene; this keeps them from re-reading and re-converting the VDB each time.
+std::vector<LoadedGrid> loadGridsCached(const std::string& path, const std::vector<std::string>& names, const std::string& field) {
+  static std::mutex mutex;
+  static std::deque<std::pair<std::string, std::vector<LoadedGrid>>> cache;
+  std::error_code ec;
+  const auto stamp = std::filesystem::last_write_time(path, ec);
+  std::string key = path + "|" + std::to_string(ec ? 0 : stamp.time_since_epoch().count());
+  for (const auto& n : names) key += "|" + n;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& [k, grids] : cache)
+      if (k == key) return grids;
+  }
+  std::vector<LoadedGrid> grids = loadVdbGrids(path, names, field);
+  std::lock_guard<std::mutex> lock(mutex);
+  cache.emplace_back(key, grids);
+  if (cache.size() > 8) cache.pop_front();
+  return grids;
+}
+
+}  // namespace
 
 std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::string>* warnings) {
   namespace fs = std::filesystem;
@@ -54,7 +81,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     if (v.emission.mode == EmissionMode::Grid) names.push_back(emission);
     std::vector<LoadedGrid> grids;
     try {
-      grids = loadVdbGrids(path, names, field);
+      grids = loadGridsCached(path, names, field);
     } catch (const InputError& e) {
       // Name the scene file too: the user edits that, and it says which volume asked for the VDB.
       throw InputError(desc.path + ": " + field + (v.has_generator ? ".generator" : ".file") + ": " + e.what());

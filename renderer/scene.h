@@ -78,6 +78,8 @@ class Scene {
   void waitForProbes();
   // Moves the camera (a live edit); relearns probes in the background when guiding uses them.
   void setCamera(const CameraDesc& camera);
+  // Applies new render settings (path length, seed, limits): nothing depends on them but the tracer.
+  void setRender(const RenderSettings& render) { desc_.render = render; }
   ~Scene();
 
  private:

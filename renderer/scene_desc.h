@@ -221,9 +221,10 @@ struct SceneDesc {
   std::vector<SurfaceDesc> surfaces;
 };
 
-// Reads and validates a scene file. `settings` are --set style edits applied to the JSON before
-// validation, so their errors read like the file's own.
-SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings = {});
+// Reads and validates a scene file. `preset` (when not empty) replaces the file's strategy with that
+// preset; `settings` are --set style edits applied to the JSON after it and before validation, so
+// their errors read like the file's own.
+SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings = {}, const std::string& preset = "");
 SceneDesc parseSceneDesc(const Json& doc, const std::string& path);
 Json sceneToJson(const SceneDesc& scene);
 // The document a scene file holds after --set edits, before validation.

@@ -94,9 +94,10 @@ SceneDesc parseSceneDesc(const Json& doc, const std::string& file) {
   return scene;
 }
 
-SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings) {
+SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings, const std::string& preset) {
   Json doc = readSceneJson(path);
-  for (const auto& s : settings) applySetting(doc, s, path + " (--set)");
+  if (!preset.empty()) doc["strategy"] = Json{{"preset", preset}};
+  for (const auto& s : settings) applySetting(doc, s, path + " (--set " + s + ")");
   return parseSceneDesc(doc, path);
 }
 

@@ -1,0 +1,33 @@
+// candela: the look-dev viewer.
+//   candela [SCENE.json] [--strategy PRESET] [--set key=value ...] [--ocio CONFIG] [--threads N]
+//           [--screenshot OUT.png (--after SECONDS | --after-spp N)] [--quit]
+//           [--measure-latency N] [--edit key=value ...]
+#include "settings.h"
+#include "viewer.h"
+
+#include <CLI/CLI.hpp>
+
+int main(int argc, char** argv) {
+  candela::ViewerOptions o;
+  CLI::App app{"Candela look-dev viewer: progressive volume path tracing with live edits and OCIO display"};
+  app.add_option("scene", o.scenePath, "Scene JSON (default: assets/scenes/torch-in-mist.json)");
+  std::string presets;
+  for (const auto& n : candela::strategyPresetNames()) presets += (presets.empty() ? "" : ", ") + n;
+  app.add_option("--strategy", o.preset, "Strategy preset replacing the scene's: " + presets);
+  app.add_option("--set", o.settings, "Edit a scene field before loading, e.g. --set volumes.0.g=0.5");
+  app.add_option("--ocio", o.ocioConfig, "OCIO config (default: $OCIO, else assets/ocio/config.ocio)");
+  app.add_option("--threads", o.threads, "Render threads (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_option("--size", o.windowWidth, "Window width in pixels")->check(CLI::Range(320, 8192));
+  app.add_option("--screenshot", o.screenshotPath, "Write a screenshot (PNG as displayed + scene-linear EXR) to this path");
+  auto after = app.add_option("--after", o.afterSeconds, "Screenshot after this many seconds of rendering")->check(CLI::PositiveNumber);
+  app.add_option("--after-spp", o.afterSpp, "Screenshot at exactly this many samples per pixel (also stops there)")
+      ->check(CLI::PositiveNumber)
+      ->excludes(after);
+  app.add_flag("--quit", o.quit, "Quit after the screenshot (or at once when there is none)");
+  app.add_option("--measure-latency", o.measureEdits, "Make N scripted edits and print edit-to-first-image latency and UI fps")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--edit", o.editsAfterStart, "Apply a key=value edit once the first image is shown (as if typed in the panel)");
+  CLI11_PARSE(app, argc, argv);
+  o.windowHeight = o.windowWidth * 820 / 1500;
+  return candela::runViewer(o);
+}

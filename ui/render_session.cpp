@@ -1,0 +1,309 @@
+#include "render_session.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace candela {
+
+SceneDiff diffScenes(const SceneDesc& a, const SceneDesc& b) {
+  SceneDiff d;
+  d.strategy = toJson(a.strategy) != toJson(b.strategy);
+  d.camera = toJson(a.camera) != toJson(b.camera);
+  d.render = toJson(a.render) != toJson(b.render);
+  Json sa = sceneToJson(a), sb = sceneToJson(b);
+  for (const char* key : {"camera", "render", "strategy"}) sa.erase(key), sb.erase(key);
+  d.structure = sa != sb || a.path != b.path;
+  return d;
+}
+
+RenderSession::RenderSession(RenderOptions options) : options_(options) {
+  worker_ = std::thread([this] { workerLoop(); });
+  loader_ = std::thread([this] { loaderLoop(); });
+}
+
+RenderSession::~RenderSession() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cancelPass_ = true;
+  workerWake_.notify_all();
+  loaderWake_.notify_all();
+  loader_.join();
+  worker_.join();
+}
+
+uint64_t RenderSession::open(const SceneDesc& desc) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const uint64_t id = ++nextRequest_;
+  buildRequest_ = Target{desc, id};
+  buildIsOpen_ = true;
+  lastRequested_ = desc;
+  loading_ = true;
+  loaderWake_.notify_one();
+  return id;
+}
+
+uint64_t RenderSession::edit(const SceneDesc& desc) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const uint64_t id = ++nextRequest_;
+  // Structural changes (volumes, lights, surfaces) need a build; the worker applies the strategy,
+  // camera and render settings itself, to whichever scene it has.
+  if (!lastRequested_ || diffScenes(*lastRequested_, desc).structure) {
+    buildRequest_ = Target{desc, id};
+    loading_ = true;
+    loaderWake_.notify_one();
+  } else if (buildRequest_) {
+    buildRequest_->desc = desc;  // a queued build picks up the newest settings too
+  }
+  lastRequested_ = desc;
+  target_ = Target{desc, id};
+  cancelPass_ = true;
+  workerWake_.notify_one();
+  return id;
+}
+
+void RenderSession::setLimits(const ProgressLimits& limits) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (toJson(limits) == toJson(limits_)) return;
+  limits_ = limits;
+  limitsChanged_ = true;
+  workerWake_.notify_one();
+}
+
+std::shared_ptr<const Frame> RenderSession::latest() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return latest_;
+}
+
+std::vector<std::string> RenderSession::takeMessages() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::exchange(messages_, {});
+}
+
+std::optional<SceneDesc> RenderSession::takeShownDesc() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::exchange(shownDescUpdate_, std::nullopt);
+}
+
+bool RenderSession::hasScene() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return shownDesc_ != nullptr;
+}
+
+void RenderSession::message(const std::string& text) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  messages_.push_back(text);
+}
+
+void RenderSession::publish(std::shared_ptr<Frame> frame) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    frame->version = latest_ ? latest_->version + 1 : 1;
+    latest_ = std::move(frame);
+  }
+  if (notify_) notify_();
+}
+
+void RenderSession::loaderLoop() {
+  for (;;) {
+    Target request;
+    bool isOpen = false;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      loaderWake_.wait(lock, [&] { return stop_ || buildRequest_; });
+      if (stop_) return;
+      request = std::move(*buildRequest_);
+      isOpen = buildIsOpen_;
+      buildRequest_.reset();
+      buildIsOpen_ = false;
+    }
+    std::vector<std::string> warnings;
+    std::shared_ptr<Scene> scene;
+    std::string error;
+    try {
+      const auto buildStart = std::chrono::steady_clock::now();
+      scene = Scene::build(request.desc, &warnings);
+      if (std::getenv("CANDELA_TRACE"))
+        std::fprintf(stderr, "trace: build %.1f ms\n", 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - buildStart).count());
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& w : warnings) messages_.push_back("warning: " + w);
+    if (scene) {
+      builtScene_ = scene;
+      builtRequest_ = request.request;
+      if (isOpen) {
+        shownDescUpdate_ = request.desc;
+        // An open replaces whatever the UI was editing.
+        target_ = Target{request.desc, request.request};
+      }
+      cancelPass_ = true;
+      workerWake_.notify_one();
+    } else {
+      messages_.push_back(error + (shownDesc_ ? " (still showing the last good scene)" : ""));
+      workerWake_.notify_one();  // rendering resumes on the last good scene
+      // The UI's fields go back to what is rendering, unless a newer request is queued.
+      if (!buildRequest_) {
+        if (shownDesc_) {
+          shownDescUpdate_ = *shownDesc_;
+          target_ = Target{*shownDesc_, request.request};
+          lastRequested_ = *shownDesc_;
+        } else {
+          lastRequested_.reset();
+        }
+      }
+    }
+    if (!buildRequest_) loading_ = false;
+    if (notify_) notify_();
+  }
+}
+
+void RenderSession::workerLoop() {
+  using Clock = std::chrono::steady_clock;
+  std::shared_ptr<Scene> scene;
+  std::unique_ptr<ProgressiveRenderer> renderer;
+  Film film;
+  uint64_t shownRequest = 0;
+  uint64_t seenTarget = 0;  // newest target examined (a structural one waits for its build)
+  bool needPreview = false;
+  double seconds = 0.0;
+  int passSpp = 1;
+  ProgressLimits limits;
+  bool finishedPublished = false;
+  double rate = 5e5;  // camera samples per second, measured; sizes the preview pass
+
+  auto restart = [&] {
+    film = Film();
+    seconds = 0.0;
+    passSpp = 1;
+    needPreview = true;
+    finishedPublished = false;
+  };
+  auto makeFrame = [&] {
+    auto frame = std::make_shared<Frame>();
+    frame->request = shownRequest;
+    frame->width = scene->camera().width();
+    frame->height = scene->camera().height();
+    frame->seconds = seconds;
+    frame->scene = std::make_shared<const SceneDesc>(scene->desc());
+    frame->sceneCenter = scene->center();
+    frame->sceneRadius = scene->radius();
+    return frame;
+  };
+
+  for (;;) {
+    std::shared_ptr<Scene> built;
+    std::optional<Target> target;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      auto finished = [&] {
+        return (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
+      };
+      workerWake_.wait(lock, [&] {
+        return stop_ || builtScene_ || limitsChanged_ || (target_ && target_->request > seenTarget) ||
+               (scene && !finished() && !loading_);
+      });
+      if (stop_) return;
+      cancelPass_ = false;
+      if (builtScene_) {
+        built = std::exchange(builtScene_, nullptr);
+        shownRequest = builtRequest_;
+      }
+      if (target_ && target_->request > shownRequest) target = target_;
+      if (target_) seenTarget = std::max(seenTarget, target_->request);
+      if (limitsChanged_) {
+        const bool lowered = (limits_.spp > 0 && (limits.spp == 0 || limits_.spp < limits.spp));
+        limits = limits_;
+        limitsChanged_ = false;
+        finishedPublished = false;
+        if (lowered && film.spp() > limits.spp && scene) restart();  // honour a lower spp limit exactly
+      }
+    }
+    if (built) {
+      scene = built;
+      renderer = std::make_unique<ProgressiveRenderer>(scene, options_);
+      restart();
+    }
+    static const bool trace = std::getenv("CANDELA_TRACE") != nullptr;
+    const auto applyStart = Clock::now();
+    if (scene && target) {
+      // Apply what can change without a rebuild. A structural change waits for its build.
+      const SceneDiff diff = diffScenes(scene->desc(), target->desc);
+      if (!diff.structure) {
+        try {
+          if (diff.strategy) scene->setStrategy(target->desc.strategy);
+          if (diff.camera) scene->setCamera(target->desc.camera);
+          if (diff.render) scene->setRender(target->desc.render);
+        } catch (const std::exception& e) {
+          message(std::string(e.what()) + " (edit not applied)");
+        }
+        shownRequest = target->request;
+        if (diff.any()) restart();
+      }
+    }
+    if (!scene) continue;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      shownDesc_ = std::make_shared<const SceneDesc>(scene->desc());
+    }
+
+    const bool done = (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
+    if (done) {
+      if (!finishedPublished) {
+        auto frame = makeFrame();
+        frame->film = film;
+        frame->finished = true;
+        frame->samplesPerSecond = seconds > 0.0 ? film.spp() * double(film.width()) * film.height() / seconds : 0.0;
+        publish(frame);
+        finishedPublished = true;
+      }
+      continue;
+    }
+
+    const auto start = Clock::now();
+    if (needPreview) {
+      // A quarter-resolution pass of the same view: the first image after an edit in milliseconds.
+      CameraDesc small = scene->desc().camera;
+      Film preview;
+      // Size the preview to take about 10 ms at the measured rate: blocky, but immediate.
+      const double pixels = double(scene->camera().width()) * scene->camera().height();
+      const int factor = std::clamp(static_cast<int>(std::ceil(std::sqrt(pixels / (0.010 * std::max(1e5, rate))))), 2, 16);
+      small.resolution = {std::max(1, scene->camera().width() / factor), std::max(1, scene->camera().height() / factor)};
+      const Camera sizedCamera(small);
+      const auto previewStart = Clock::now();
+      if (!renderer->renderPass(preview, 1, &cancelPass_, &sizedCamera)) continue;
+      rate = std::max(rate * 0.5, preview.width() * double(preview.height()) / std::max(1e-4, std::chrono::duration<double>(Clock::now() - previewStart).count()));
+      if (trace)
+        std::fprintf(stderr, "trace: apply %.1f ms, preview %.1f ms\n", 1e3 * std::chrono::duration<double>(previewStart - applyStart).count(),
+                     1e3 * std::chrono::duration<double>(Clock::now() - previewStart).count());
+      needPreview = false;
+      auto frame = makeFrame();
+      frame->preview = true;
+      frame->film = std::move(preview);
+      publish(frame);
+      continue;
+    }
+    int spp = passSpp;
+    if (limits.spp > 0) spp = std::min(spp, limits.spp - film.spp());
+    if (!renderer->renderPass(film, spp, &cancelPass_)) continue;
+    const double passSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+    seconds += passSeconds;
+    rate = spp * double(film.width()) * film.height() / std::max(1e-4, passSeconds);
+    // Aim for passes of about a tenth of a second: frequent updates, little per-pass overhead.
+    if (passSeconds < 0.05) passSpp = std::min(passSpp * 2, 256);
+    else if (passSeconds > 0.25 && passSpp > 1) passSpp /= 2;
+    auto frame = makeFrame();
+    frame->film = film;
+    frame->samplesPerSecond = seconds > 0.0 ? film.spp() * double(film.width()) * film.height() / seconds : 0.0;
+    frame->finished = (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
+    finishedPublished = frame->finished;
+    publish(frame);
+  }
+}
+
+}  // namespace candela

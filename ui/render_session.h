@@ -1,0 +1,119 @@
+// The viewer's renderer, off the UI thread. A worker thread renders progressive passes of the
+// current scene; a loader thread builds scenes (file opens, reloads and edits that change volumes,
+// lights or surfaces) while the worker keeps rendering the last good one. Edits that only touch the
+// strategy, camera or render settings apply between passes without a rebuild. Any request cancels
+// the pass in flight (within milliseconds) and restarts accumulation with a quarter-resolution preview
+// pass, so the first new image arrives fast.
+//
+// The UI thread only calls the non-blocking methods below: requests are queued and frames are
+// shared, immutable snapshots.
+#pragma once
+
+#include "film.h"
+#include "renderer.h"
+#include "scene.h"
+#include "view_settings.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace candela {
+
+// One published image. `request` is the id of the newest request it reflects, so the UI can time
+// edit-to-first-image.
+struct Frame {
+  uint64_t version = 0;
+  uint64_t request = 0;
+  bool preview = false;     // quarter-resolution preview: `film` holds it, upscale to display
+  Film film;                // sums and sums of squares: mean and standard error per pixel
+  int width = 0, height = 0;  // the full image size (the preview's film is smaller)
+  double seconds = 0.0;     // render time accumulated since the last restart
+  double samplesPerSecond = 0.0;
+  bool finished = false;    // a progress limit was reached
+  std::shared_ptr<const SceneDesc> scene;  // the settings this frame was rendered with
+  Vec3 sceneCenter{0.0f};   // bounds of the scene's content, for framing the camera
+  float sceneRadius = 1.0f;
+};
+
+class RenderSession {
+ public:
+  explicit RenderSession(RenderOptions options = {});
+  ~RenderSession();
+  RenderSession(const RenderSession&) = delete;
+  RenderSession& operator=(const RenderSession&) = delete;
+
+  // Builds `desc` on the loader thread and renders it when ready (a newly opened scene). Returns the
+  // request id.
+  uint64_t open(const SceneDesc& desc);
+  // A live edit of the scene being shown: applied between passes when only the strategy, camera or
+  // render settings differ, else rebuilt on the loader thread. Returns the request id.
+  uint64_t edit(const SceneDesc& desc);
+  void setLimits(const ProgressLimits& limits);
+  // Called on the worker or loader thread whenever a frame or message is published (the viewer wakes
+  // its event loop with it). Set before the first request.
+  void setNotify(std::function<void()> notify) { notify_ = std::move(notify); }
+
+  // The newest frame (null before the first). Cheap: a shared pointer copy.
+  std::shared_ptr<const Frame> latest() const;
+  // Messages for the user (build errors, warnings); each is returned once.
+  std::vector<std::string> takeMessages();
+  // After an open succeeds, the description now shown; after a failed build, the last good one, so
+  // the UI's fields return to what is rendering. Each is returned once.
+  std::optional<SceneDesc> takeShownDesc();
+  bool loading() const { return loading_.load(); }
+  bool hasScene() const;
+
+ private:
+  void workerLoop();
+  void loaderLoop();
+  void message(const std::string& text);
+  void publish(std::shared_ptr<Frame> frame);
+
+  RenderOptions options_;
+  mutable std::mutex mutex_;
+  std::condition_variable workerWake_, loaderWake_;
+  bool stop_ = false;
+  uint64_t nextRequest_ = 0;
+
+  // Worker state (guarded by mutex_ where shared).
+  struct Target {
+    SceneDesc desc;
+    uint64_t request = 0;
+  };
+  std::optional<Target> target_;           // the newest desc the UI wants
+  std::shared_ptr<Scene> builtScene_;      // a finished build waiting for the worker
+  uint64_t builtRequest_ = 0;
+  ProgressLimits limits_;
+  bool limitsChanged_ = false;
+  std::atomic<bool> cancelPass_{false};
+
+  // Loader state.
+  std::optional<Target> buildRequest_;
+  bool buildIsOpen_ = false;
+  std::optional<SceneDesc> lastRequested_;  // structure of the newest open or edit
+  std::atomic<bool> loading_{false};
+  std::shared_ptr<const SceneDesc> shownDesc_;  // desc of the scene the worker renders
+
+  std::shared_ptr<const Frame> latest_;
+  std::vector<std::string> messages_;
+  std::optional<SceneDesc> shownDescUpdate_;
+
+  std::function<void()> notify_;
+  std::thread worker_, loader_;
+};
+
+// Which parts of two descriptions differ: decides between a live update and a rebuild.
+struct SceneDiff {
+  bool strategy = false, camera = false, render = false, structure = false;
+  bool any() const { return strategy || camera || render || structure; }
+};
+SceneDiff diffScenes(const SceneDesc& a, const SceneDesc& b);
+
+}  // namespace candela

@@ -1,0 +1,819 @@
+#include "viewer.h"
+
+#include "color_pipeline.h"
+#include "gl_display.h"
+#include "image_io.h"
+#include "param_editor.h"
+#include "render_session.h"
+
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+namespace candela {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string defaultScenePath() { return std::string(CANDELA_ASSET_DIR) + "/scenes/torch-in-mist.json"; }
+
+// A path next to `wanted` that does not exist yet: NAME.png, NAME-2.png, ...
+std::string freshPath(const fs::path& wanted) {
+  fs::path p = wanted;
+  for (int i = 2; fs::exists(p) || fs::exists(fs::path(p).replace_extension(".exr")); ++i)
+    p = wanted.parent_path() / (wanted.stem().string() + "-" + std::to_string(i) + wanted.extension().string());
+  return p.string();
+}
+
+fs::file_time_type modificationTime(const std::string& path) {
+  std::error_code ec;
+  auto t = fs::last_write_time(path, ec);
+  return ec ? fs::file_time_type{} : t;
+}
+
+// Edge-triggered key presses from GLFW (ImGui 1.86 has no named keys for letters).
+class Keys {
+ public:
+  bool pressed(GLFWwindow* w, int key) {
+    const bool down = glfwGetKey(w, key) == GLFW_PRESS;
+    const bool was = down_[key];
+    down_[key] = down;
+    return down && !was;
+  }
+
+ private:
+  bool down_[GLFW_KEY_LAST + 1] = {};
+};
+
+class Viewer {
+ public:
+  Viewer(GLFWwindow* window, const ViewerOptions& options)
+      : window_(window), options_(options), session_(RenderOptions{options.threads, 32}) {
+    session_.setNotify([] { glfwPostEmptyEvent(); });  // thread-safe: wakes the event wait below
+    colors_ = ColorPipeline::load(options.ocioConfig);
+    if (!colors_.message().empty()) report(colors_.message());
+    display_ = colors_.resolve(display_);
+    gl_ = std::make_unique<GlDisplay>();
+    applyDisplay();
+    if (options.afterSpp > 0) limits_.spp = options.afterSpp;
+    session_.setLimits(limits_);
+    openScene(options.scenePath.empty() ? defaultScenePath() : options.scenePath, options.settings, options.preset);
+  }
+
+  int run();
+
+ private:
+  // --- scene and edits ---
+  void openScene(const std::string& path, const std::vector<std::string>& settings = {}, const std::string& preset = "") {
+    try {
+      SceneDesc desc = loadSceneDesc(path, settings, preset);
+      scenePath_ = path;
+      sceneSettings_ = settings;
+      scenePreset_ = preset;
+      sceneTime_ = modificationTime(path);
+      pendingOpen_ = session_.open(desc);
+    } catch (const std::exception& e) {
+      report(e.what());
+      if (!haveScene_) scenePath_ = path;  // watch it, so fixing the file loads it
+      sceneTime_ = modificationTime(path);
+    }
+  }
+  // Validates the edited description (the same checks as a scene file) and sends it to the renderer.
+  // A bad value is reported and the fields return to the last good state.
+  void submitEdit() {
+    try {
+      SceneDesc valid = parseSceneDesc(sceneToJson(edited_), edited_.path);
+      valid.path = edited_.path;
+      beginLatency(session_.edit(valid));
+    } catch (const std::exception& e) {
+      report(std::string("edit rejected: ") + e.what());
+      if (frame_ && frame_->scene) edited_ = *frame_->scene;
+    }
+  }
+  void applySettingEdit(const std::string& assignment) {
+    try {
+      Json doc = sceneToJson(edited_);
+      applySetting(doc, assignment, edited_.path + " (edit " + assignment + ")");
+      SceneDesc valid = parseSceneDesc(doc, edited_.path);
+      edited_ = valid;
+      beginLatency(session_.edit(valid));
+    } catch (const std::exception& e) {
+      report(std::string("edit rejected: ") + e.what());
+    }
+  }
+  void beginLatency(uint64_t request) {
+    if (latencyRequest_ == 0) {  // time the first of a burst of edits (a drag edits every frame)
+      latencyRequest_ = request;
+      latencyStart_ = Clock::now();
+    }
+  }
+
+  void report(const std::string& text) {
+    std::cerr << "candela: " << text << "\n";
+    messages_.push_back({text, Clock::now()});
+    if (messages_.size() > 50) messages_.pop_front();
+  }
+
+  void applyDisplay() {
+    const std::string error = gl_->setPipeline(colors_, display_);
+    if (!error.empty()) report(error);
+    outputDirty_ = true;
+  }
+
+  void pollSession();
+  void pollSceneFile();
+  void drawMenuBar();
+  void drawPanel();
+  void drawStatusBar();
+  void drawOpenDialog();
+  void handleCamera();
+  void handleKeys();
+  void frameVolume();
+  bool screenshot(const std::string& requestedPath);
+  void scripted();
+
+  // Image rectangle in window coordinates (top-left origin), aspect-fitted into the free area.
+  struct Rect {
+    float x = 0, y = 0, w = 0, h = 0;
+    bool contains(float px, float py) const { return px >= x && py >= y && px < x + w && py < y + h; }
+  };
+  Rect imageRect() const;
+
+  GLFWwindow* window_;
+  ViewerOptions options_;
+  RenderSession session_;
+  ColorPipeline colors_;
+  std::unique_ptr<GlDisplay> gl_;
+  DisplaySettings display_;
+  ProgressLimits limits_;
+
+  std::string scenePath_, scenePreset_;
+  std::vector<std::string> sceneSettings_;
+  fs::file_time_type sceneTime_{};
+  Clock::time_point lastPoll_ = Clock::now();
+  uint64_t pendingOpen_ = 0;
+  bool haveScene_ = false;
+  SceneDesc edited_;    // what the panels edit
+  SceneDesc fileScene_; // as opened (camera reset)
+
+  std::shared_ptr<const Frame> frame_;
+  uint64_t uploadedVersion_ = 0;
+  bool outputDirty_ = true;
+
+  std::deque<std::pair<std::string, Clock::time_point>> messages_;
+  bool showMessages_ = false, showOpen_ = false;
+  std::string openPath_;
+
+  Keys keys_;
+  int dragButton_ = -1;
+  bool readoutLocked_ = false;
+  int lockedX_ = 0, lockedY_ = 0;
+
+  uint64_t latencyRequest_ = 0;
+  Clock::time_point latencyStart_;
+  double lastLatencyMs_ = 0.0;
+  std::vector<double> latencies_;
+  std::deque<double> frameTimes_;
+
+  const float panelWidth_ = 420.0f;
+  float statusHeight_ = 0.0f, menuHeight_ = 0.0f;
+
+  // Scripted state.
+  Clock::time_point start_ = Clock::now();
+  bool editsDone_ = false, screenshotDone_ = false;
+  int measureIndex_ = 0;
+  Clock::time_point measureNext_;
+  Clock::time_point measureStart_;
+  int measureFrames_ = 0;
+  std::vector<std::pair<std::string, double>> measured_;
+  bool quitNow_ = false;
+  int busyFrames_ = 3;
+  int exitCode_ = 0;
+};
+
+Viewer::Rect Viewer::imageRect() const {
+  int ww, wh;
+  glfwGetWindowSize(window_, &ww, &wh);
+  Rect area{0.0f, menuHeight_, std::max(1.0f, ww - panelWidth_), std::max(1.0f, wh - menuHeight_ - statusHeight_)};
+  if (!frame_) return area;
+  const float aspect = static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
+  Rect r = area;
+  if (area.w / area.h > aspect) {
+    r.w = area.h * aspect;
+    r.x = area.x + 0.5f * (area.w - r.w);
+  } else {
+    r.h = area.w / aspect;
+    r.y = area.y + 0.5f * (area.h - r.h);
+  }
+  return r;
+}
+
+void Viewer::pollSession() {
+  for (const auto& m : session_.takeMessages()) report(m);
+  if (auto shown = session_.takeShownDesc()) {
+    const bool opened = !haveScene_ || shown->path != edited_.path || pendingOpen_;
+    edited_ = *shown;
+    if (opened && pendingOpen_) fileScene_ = *shown, pendingOpen_ = 0;
+    haveScene_ = true;
+  }
+  auto latest = session_.latest();
+  if (latest && latest->version != uploadedVersion_) {
+    frame_ = latest;
+    uploadedVersion_ = latest->version;
+    gl_->uploadImage(latest->film.width(), latest->film.height(), latest->film.meanImage());
+    outputDirty_ = true;
+    if (!haveScene_ && latest->scene) edited_ = *latest->scene, fileScene_ = edited_, haveScene_ = true;
+  }
+}
+
+void Viewer::pollSceneFile() {
+  if (secondsSince(lastPoll_) < 0.5 || scenePath_.empty()) return;
+  lastPoll_ = Clock::now();
+  const auto t = modificationTime(scenePath_);
+  if (t != sceneTime_ && t != fs::file_time_type{}) {
+    report("reloading " + scenePath_ + " (the file changed)");
+    openScene(scenePath_, sceneSettings_, scenePreset_);
+  }
+}
+
+void Viewer::frameVolume() {
+  if (!frame_) return;
+  CameraDesc& c = edited_.camera;
+  const Vec3 dir = glm::normalize(c.position - c.look_at);
+  // The vertical field of view is the narrower one in a landscape image; use the narrower of the two.
+  const float aspect = static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
+  const float tanHalfY = std::tan(glm::radians(c.fov_y) * 0.5f);
+  const float halfFov = std::atan(std::min(tanHalfY, tanHalfY * aspect));
+  const float distance = frame_->sceneRadius / std::sin(halfFov) * 1.05f;
+  c.look_at = frame_->sceneCenter;
+  c.position = c.look_at + dir * distance;
+  submitEdit();
+}
+
+void Viewer::handleCamera() {
+  ImGuiIO& io = ImGui::GetIO();
+  if (!haveScene_) return;
+  const Rect r = imageRect();
+  // Start a drag only on the image and only when ImGui does not want the mouse.
+  if (dragButton_ < 0 && !io.WantCaptureMouse && r.contains(io.MousePos.x, io.MousePos.y)) {
+    for (int b = 0; b < 3; ++b)
+      if (io.MouseClicked[b]) dragButton_ = b;
+  }
+  if (dragButton_ >= 0 && !io.MouseDown[dragButton_]) dragButton_ = -1;
+  CameraDesc& c = edited_.camera;
+  bool moved = false;
+  const Vec3 forward = glm::normalize(c.look_at - c.position);
+  const Vec3 right = glm::normalize(glm::cross(forward, c.up));
+  const Vec3 up = glm::cross(right, forward);
+  const float distance = glm::length(c.look_at - c.position);
+  const float dx = io.MouseDelta.x, dy = io.MouseDelta.y;
+  // Maya: Alt+left tumble, Alt+middle track, Alt+right dolly; plain buttons do the same here.
+  if (dragButton_ >= 0 && (dx != 0.0f || dy != 0.0f)) {
+    if (dragButton_ == 0) {
+      const Vec3 worldUp = glm::normalize(c.up);
+      Vec3 offset = c.position - c.look_at;
+      const Mat4 yaw = glm::rotate(Mat4(1.0f), -dx * 0.008f, worldUp);
+      offset = Vec3(yaw * glm::vec4(offset, 0.0f));
+      const Vec3 newRight = Vec3(yaw * glm::vec4(right, 0.0f));
+      const Mat4 pitch = glm::rotate(Mat4(1.0f), -dy * 0.008f, newRight);
+      const Vec3 pitched = Vec3(pitch * glm::vec4(offset, 0.0f));
+      // Stop short of the poles, where the up vector would flip.
+      if (std::abs(glm::dot(glm::normalize(pitched), worldUp)) < 0.995f) offset = pitched;
+      c.position = c.look_at + offset;
+    } else if (dragButton_ == 2) {
+      const float factor = std::exp(dy * 0.01f);
+      c.position = c.look_at + (c.position - c.look_at) * factor;
+    } else {
+      const float pixelSize = 2.0f * distance * std::tan(glm::radians(c.fov_y) * 0.5f) / std::max(1.0f, r.h);
+      const Vec3 shift = (-dx * right + dy * up) * pixelSize;
+      c.position += shift;
+      c.look_at += shift;
+    }
+    moved = true;
+  }
+  if (!io.WantCaptureMouse && r.contains(io.MousePos.x, io.MousePos.y) && io.MouseWheel != 0.0f) {
+    c.position = c.look_at + (c.position - c.look_at) * std::exp(-io.MouseWheel * 0.1f);
+    moved = true;
+  }
+  if (moved) submitEdit();
+}
+
+void Viewer::handleKeys() {
+  ImGuiIO& io = ImGui::GetIO();
+  const bool ctrl = io.KeyCtrl;
+  // Query every key each frame so edges are tracked even while a text field has focus.
+  const bool f = keys_.pressed(window_, GLFW_KEY_F), r = keys_.pressed(window_, GLFW_KEY_R), home = keys_.pressed(window_, GLFW_KEY_HOME),
+             l = keys_.pressed(window_, GLFW_KEY_L), s = keys_.pressed(window_, GLFW_KEY_S), f12 = keys_.pressed(window_, GLFW_KEY_F12),
+             c = keys_.pressed(window_, GLFW_KEY_C), o = keys_.pressed(window_, GLFW_KEY_O), e = keys_.pressed(window_, GLFW_KEY_E);
+  if (io.WantCaptureKeyboard) return;
+  if (f && haveScene_) frameVolume();
+  if ((r || home) && haveScene_) {
+    edited_.camera = fileScene_.camera;
+    submitEdit();
+  }
+  if (l) {
+    readoutLocked_ = !readoutLocked_;
+    if (readoutLocked_ && frame_) {
+      const Rect rect = imageRect();
+      lockedX_ = std::clamp(static_cast<int>((io.MousePos.x - rect.x) / rect.w * frame_->width), 0, frame_->width - 1);
+      lockedY_ = std::clamp(static_cast<int>((io.MousePos.y - rect.y) / rect.h * frame_->height), 0, frame_->height - 1);
+    }
+  }
+  if (f12 || (s && !ctrl)) screenshot("");
+  if (c) {
+    display_.channel = static_cast<ChannelView>((static_cast<int>(display_.channel) + 1) % 5);
+    applyDisplay();
+  }
+  if (e) {  // exposure: E up, Shift+E down
+    display_.exposure += io.KeyShift ? -0.5f : 0.5f;
+    applyDisplay();
+  }
+  if (o && ctrl) showOpen_ = true;
+}
+
+void Viewer::drawMenuBar() {
+  if (!ImGui::BeginMainMenuBar()) return;
+  menuHeight_ = ImGui::GetWindowSize().y;
+  if (ImGui::BeginMenu("File")) {
+    if (ImGui::MenuItem("Open scene...", "Ctrl+O")) showOpen_ = true;
+    if (ImGui::MenuItem("Reload scene", nullptr, false, !scenePath_.empty())) openScene(scenePath_, sceneSettings_, scenePreset_);
+    if (ImGui::MenuItem("Save screenshot", "S / F12", false, frame_ != nullptr)) screenshot("");
+    ImGui::Separator();
+    if (ImGui::MenuItem("Quit")) glfwSetWindowShouldClose(window_, 1);
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("View")) {
+    if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
+    if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) edited_.camera = fileScene_.camera, submitEdit();
+    if (ImGui::MenuItem("Lock pixel readout", "L", readoutLocked_)) readoutLocked_ = !readoutLocked_;
+    ImGui::Separator();
+    for (const auto& [value, name] : EnumNames<ChannelView>::get())
+      if (ImGui::MenuItem((std::string("Channel: ") + name).c_str(), value == ChannelView::RGB ? "C cycles" : nullptr, display_.channel == value))
+        display_.channel = value, applyDisplay();
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Display")) {
+    for (const auto& d : colors_.displays())
+      if (ImGui::BeginMenu(d.c_str())) {
+        for (const auto& v : colors_.views(d))
+          if (ImGui::MenuItem(v.c_str(), nullptr, display_.display == d && display_.view == v))
+            display_.display = d, display_.view = v, applyDisplay();
+        ImGui::EndMenu();
+      }
+    if (ImGui::BeginMenu("Look")) {
+      if (ImGui::MenuItem("(none)", nullptr, display_.look.empty())) display_.look.clear(), applyDisplay();
+      for (const auto& l : colors_.looks())
+        if (ImGui::MenuItem(l.c_str(), nullptr, display_.look == l)) display_.look = l, applyDisplay();
+      ImGui::EndMenu();
+    }
+    ImGui::Separator();
+    ImGui::TextDisabled("Config: %s", colors_.configPath().c_str());
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Help")) {
+    ImGui::MenuItem("Messages", nullptr, &showMessages_);
+    ImGui::TextDisabled("Mouse on the image: left tumble, middle track, right dolly, wheel dolly (Alt optional)");
+    ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot");
+    ImGui::EndMenu();
+  }
+  ImGui::EndMainMenuBar();
+}
+
+void Viewer::drawPanel() {
+  int ww, wh;
+  glfwGetWindowSize(window_, &ww, &wh);
+  ImGui::SetNextWindowPos(ImVec2(ww - panelWidth_, menuHeight_));
+  ImGui::SetNextWindowSize(ImVec2(panelWidth_, wh - menuHeight_ - statusHeight_));
+  ImGui::Begin("Parameters", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushItemWidth(-170.0f);
+
+  if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ParamEditor editor;
+    editor.choices["display"] = colors_.displays();
+    editor.choices["view"] = colors_.views(display_.display);
+    std::vector<std::string> looks{""};
+    for (const auto& l : colors_.looks()) looks.push_back(l);
+    editor.choices["look"] = looks;
+    display_.visit(editor);
+    if (editor.changed) {
+      display_ = colors_.resolve(display_);
+      applyDisplay();
+    }
+  }
+  if (ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ParamEditor editor;
+    limits_.visit(editor);
+    if (editor.changed) session_.setLimits(limits_);
+    if (ImGui::Button("Restart")) beginLatency(session_.edit(edited_));
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Discard the accumulated samples and start again");
+  }
+  if (!haveScene_) {
+    ImGui::TextWrapped(session_.loading() ? "Loading..." : "No scene. File > Open.");
+    ImGui::End();
+    return;
+  }
+  bool changed = false;
+  if (ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ParamEditor editor;
+    editor.choices["preset"] = strategyPresetNames();
+    edited_.strategy.visit(editor);
+    if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
+    changed |= editor.changed;
+  }
+  if (ImGui::CollapsingHeader("Render")) {
+    ParamEditor editor;
+    edited_.render.visit(editor);
+    changed |= editor.changed;
+  }
+  if (ImGui::CollapsingHeader("Camera")) {
+    ParamEditor editor;
+    edited_.camera.visit(editor);
+    changed |= editor.changed;
+  }
+  auto list = [&](const char* title, auto& items, auto label) {
+    if (!ImGui::CollapsingHeader(title, ImGuiTreeNodeFlags_DefaultOpen)) return;
+    for (size_t i = 0; i < items.size(); ++i) {
+      ImGui::PushID(static_cast<int>(i));
+      if (ImGui::TreeNodeEx(label(items[i], i).c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
+        ParamEditor editor;
+        items[i].visit(editor);
+        changed |= editor.changed;
+        ImGui::TreePop();
+      }
+      ImGui::PopID();
+    }
+  };
+  list("Volumes", edited_.volumes, [](const VolumeDesc& v, size_t i) { return v.name.empty() ? "volume " + std::to_string(i) : v.name; });
+  list("Lights", edited_.lights, [](const LightDesc& l, size_t i) { return std::to_string(i) + ": " + enumName(l.type); });
+  list("Surfaces", edited_.surfaces, [](const SurfaceDesc& s, size_t i) { return std::to_string(i) + ": " + enumName(s.type); });
+  ImGui::PopItemWidth();
+  ImGui::End();
+  if (changed) submitEdit();
+}
+
+void Viewer::drawStatusBar() {
+  int ww, wh;
+  glfwGetWindowSize(window_, &ww, &wh);
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  statusHeight_ = 3.0f * line + 2.0f * ImGui::GetStyle().WindowPadding.y;
+  ImGui::SetNextWindowPos(ImVec2(0.0f, wh - statusHeight_));
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(ww), statusHeight_));
+  ImGui::Begin("Status", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoScrollbar |
+                   ImGuiWindowFlags_NoSavedSettings);
+  double fps = 0.0;
+  if (frameTimes_.size() > 1) fps = (frameTimes_.size() - 1) / (frameTimes_.back() - frameTimes_.front());
+  if (frame_) {
+    const Film& film = frame_->film;
+    ImGui::Text("%s | %s | %dx%d | %d spp%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %.0f ms | UI %.0f fps%s",
+                scenePath_.c_str(), frame_->scene ? frame_->scene->strategy.preset.c_str() : "", frame_->width, frame_->height,
+                frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
+                frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), lastLatencyMs_, fps,
+                session_.loading() ? " | loading..." : "");
+  } else {
+    ImGui::Text("%s | %s", scenePath_.c_str(), session_.loading() ? "loading..." : "no image");
+  }
+  // Pixel readout: scene-linear values under the cursor (or at the locked pixel).
+  ImGuiIO& io = ImGui::GetIO();
+  const Rect r = imageRect();
+  int px = -1, py = -1;
+  if (readoutLocked_) {
+    px = lockedX_, py = lockedY_;
+  } else if (frame_ && r.contains(io.MousePos.x, io.MousePos.y)) {
+    px = static_cast<int>((io.MousePos.x - r.x) / r.w * frame_->width);
+    py = static_cast<int>((io.MousePos.y - r.y) / r.h * frame_->height);
+  }
+  if (frame_ && px >= 0 && px < frame_->width && py >= 0 && py < frame_->height) {
+    const Film& film = frame_->film;
+    const int fx = px * film.width() / frame_->width, fy = py * film.height() / frame_->height;
+    const Rgb m = film.mean(fx, fy), se = film.standardError(fx, fy);
+    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, readoutLocked_ ? " [locked: L]" : "", m.r,
+                m.g, m.b, se.r, se.g, se.b, film.spp());
+  } else {
+    ImGui::TextDisabled("pixel readout: hover the image (L locks)");
+  }
+  // The newest message stays visible for 10 seconds; Help > Messages keeps them all.
+  if (!messages_.empty() && secondsSince(messages_.back().second) < 10.0)
+    ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.35f, 1.0f), "%s", messages_.back().first.c_str());
+  ImGui::End();
+
+  if (showMessages_) {
+    ImGui::SetNextWindowSize(ImVec2(700, 300), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Messages", &showMessages_))
+      for (const auto& m : messages_) ImGui::TextWrapped("%s", m.first.c_str());
+    ImGui::End();
+  }
+}
+
+void Viewer::drawOpenDialog() {
+  if (showOpen_) {
+    ImGui::OpenPopup("Open scene");
+    showOpen_ = false;
+    openPath_ = scenePath_;
+  }
+  ImGui::SetNextWindowSize(ImVec2(640, 420), ImGuiCond_Appearing);
+  if (!ImGui::BeginPopupModal("Open scene")) return;
+  bool go = ImGui::InputText("path", &openPath_, ImGuiInputTextFlags_EnterReturnsTrue);
+  ImGui::TextDisabled("Scenes found:");
+  ImGui::BeginChild("scenes", ImVec2(0, -ImGui::GetFrameHeightWithSpacing()), true);
+  std::vector<fs::path> roots{fs::path(CANDELA_ASSET_DIR) / "scenes"};
+  if (!scenePath_.empty()) roots.push_back(fs::path(scenePath_).parent_path());
+  std::vector<std::string> found;
+  for (const auto& root : roots) {
+    std::error_code ec;
+    for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+      if (it->path().extension() == ".json") found.push_back(fs::weakly_canonical(it->path()).string());
+  }
+  std::sort(found.begin(), found.end());
+  found.erase(std::unique(found.begin(), found.end()), found.end());
+  for (const auto& f : found)
+    if (ImGui::Selectable(f.c_str(), f == openPath_, ImGuiSelectableFlags_AllowDoubleClick)) {
+      openPath_ = f;
+      if (ImGui::IsMouseDoubleClicked(0)) go = true;
+    }
+  ImGui::EndChild();
+  go |= ImGui::Button("Open");
+  ImGui::SameLine();
+  if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+  if (go) {
+    openScene(openPath_);
+    ImGui::CloseCurrentPopup();
+  }
+  ImGui::EndPopup();
+}
+
+bool Viewer::screenshot(const std::string& requestedPath) {
+  if (!frame_ || !gl_->outputWidth()) {
+    report("screenshot: no image yet");
+    return false;
+  }
+  std::string pngPath = requestedPath;
+  if (pngPath.empty()) {
+    const std::time_t now = std::time(nullptr);
+    char stamp[32];
+    std::strftime(stamp, sizeof(stamp), "%Y%m%d-%H%M%S", std::localtime(&now));
+    const std::string stem = fs::path(scenePath_).stem().string();
+    pngPath = freshPath(fs::path("screenshots") / (stem + "-" + stamp + ".png"));
+  }
+  const std::string exrPath = fs::path(pngPath).replace_extension(".exr").string();
+  try {
+    if (fs::path(pngPath).has_parent_path()) fs::create_directories(fs::path(pngPath).parent_path());
+    std::map<std::string, std::string> meta;
+    meta["scene"] = scenePath_;
+    if (frame_->scene) {
+      meta["strategy"] = toJson(frame_->scene->strategy).dump();
+      meta["settings"] = sceneToJson(*frame_->scene).dump();
+    }
+    meta["display"] = toJson(colors_.resolve(display_)).dump();
+    meta["ocio_config"] = colors_.configPath();
+    meta["spp"] = std::to_string(frame_->preview ? 0 : frame_->film.spp());
+    meta["time_s"] = std::to_string(frame_->seconds);
+    meta["rejected_samples"] = std::to_string(frame_->film.rejectedSamples());
+    DisplayImage png;
+    png.width = gl_->outputWidth();
+    png.height = gl_->outputHeight();
+    png.rgb8 = gl_->readOutput();
+    png.metadata = meta;
+    writeDisplayPng(pngPath, png);
+    Image exr;
+    exr.width = frame_->film.width();
+    exr.height = frame_->film.height();
+    exr.rgb = frame_->film.meanImage();
+    exr.metadata = meta;
+    writeExr(exrPath, exr);
+    report("screenshot: wrote " + pngPath + " and " + exrPath);
+    return true;
+  } catch (const std::exception& e) {
+    report(std::string("screenshot failed: ") + e.what());
+    return false;
+  }
+}
+
+void Viewer::scripted() {
+  const bool fullFrame = frame_ && !frame_->preview && frame_->film.spp() > 0 && !session_.loading();
+  if (!fullFrame) {
+    // A scripted run whose scene never loads must not wait forever.
+    if (options_.quit && !haveScene_ && !session_.loading() && secondsSince(start_) > 2.0) {
+      report("no scene could be loaded; quitting");
+      exitCode_ = 1;
+      quitNow_ = true;
+    }
+    return;
+  }
+  if (!editsDone_) {
+    for (const auto& e : options_.editsAfterStart) applySettingEdit(e);
+    editsDone_ = true;
+    if (!options_.editsAfterStart.empty()) return;  // let the edits reach the renderer first
+  }
+  if (options_.measureEdits > 0 && measureIndex_ <= options_.measureEdits) {
+    // Alternate edits of three kinds an artist makes: a strategy value, the camera, a volume value.
+    if (measureIndex_ == 0) {
+      measureStart_ = Clock::now();
+      measureNext_ = Clock::now();
+      measureFrames_ = 0;
+    }
+    if (Clock::now() >= measureNext_ && latencyRequest_ == 0) {
+      if (measureIndex_ == options_.measureEdits) {
+        ++measureIndex_;
+        return;
+      }
+      const int kind = measureIndex_ % 3;
+      std::string label;
+      const bool up = (measureIndex_ / 3) % 2 == 0;  // every edit changes something
+      if (kind == 0) {
+        edited_.strategy.majorant.emission_weight = edited_.strategy.majorant.emission_weight == 10.0f ? 5.0f : 10.0f;
+        label = "strategy (emission weight)";
+      } else if (kind == 1) {
+        const float angle = 0.05f * (up ? 1.0f : -1.0f);
+        Vec3 offset = edited_.camera.position - edited_.camera.look_at;
+        offset = Vec3(glm::rotate(Mat4(1.0f), angle, Vec3(0, 1, 0)) * glm::vec4(offset, 0.0f));
+        edited_.camera.position = edited_.camera.look_at + offset;
+        label = "camera (tumble)";
+      } else {
+        if (!edited_.volumes.empty()) edited_.volumes[0].emission.intensity *= up ? 1.25f : 0.8f;
+        label = "volume (emission intensity, rebuild)";
+      }
+      measured_.push_back({label, -1.0});
+      submitEdit();
+      ++measureIndex_;
+      measureNext_ = Clock::now() + std::chrono::milliseconds(400);
+    }
+    return;
+  }
+  if (options_.measureEdits > 0 && measureIndex_ == options_.measureEdits + 1) {
+    ++measureIndex_;
+    const double wall = secondsSince(measureStart_);
+    std::map<std::string, std::vector<double>> byKind;
+    for (const auto& [label, ms] : measured_)
+      if (ms >= 0.0) byKind[label].push_back(ms);
+    std::printf("edit-to-first-image latency (%dx%d, %u hardware threads):\n", frame_->width, frame_->height, std::thread::hardware_concurrency());
+    for (auto& [label, v] : byKind) {
+      std::sort(v.begin(), v.end());
+      std::printf("  %-40s median %6.1f ms  max %6.1f ms  (%zu edits)\n", label.c_str(), v[v.size() / 2], v.back(), v.size());
+    }
+    std::printf("UI frame rate while rendering: %.1f fps over %.1f s\n", measureFrames_ / wall, wall);
+    std::fflush(stdout);
+  }
+  if (!options_.screenshotPath.empty() && !screenshotDone_) {
+    const bool ready = (options_.afterSpp > 0 && frame_->film.spp() >= options_.afterSpp) ||
+                       (options_.afterSeconds > 0.0 && frame_->seconds >= options_.afterSeconds) ||
+                       (options_.afterSpp <= 0 && options_.afterSeconds <= 0.0);
+    if (!ready) return;
+    screenshotDone_ = true;
+    if (!screenshot(options_.screenshotPath)) exitCode_ = 1;
+  }
+  if (options_.quit && (options_.screenshotPath.empty() || screenshotDone_)) quitNow_ = true;
+}
+
+int Viewer::run() {
+  const double targetFrame = 1.0 / 60.0;
+  auto frameStart = Clock::now();
+  while (!glfwWindowShouldClose(window_) && !quitNow_) {
+    const auto lastFrame = frameStart;
+    frameStart = Clock::now();
+    // Redraw continuously only while the user interacts (and a few frames after, so ImGui settles);
+    // otherwise sleep until an input event or a new image wakes us: the cores stay with the renderer.
+    const bool measuring = options_.measureEdits > 0 && measureIndex_ <= options_.measureEdits;
+    if (busyFrames_ > 0 || measuring || !options_.screenshotPath.empty()) {
+      // At most ~60 fps, but a new image (glfwPostEmptyEvent) or input wakes us at once.
+      glfwWaitEventsTimeout(std::max(0.0, targetFrame - secondsSince(lastFrame)));
+    } else {
+      glfwWaitEventsTimeout(0.5);
+    }
+    busyFrames_ = std::max(0, busyFrames_ - 1);
+    try {
+      pollSession();
+      pollSceneFile();
+    } catch (const std::exception& e) {
+      report(e.what());
+    }
+
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    try {
+      drawMenuBar();
+      drawStatusBar();
+      drawPanel();
+      drawOpenDialog();
+      handleCamera();
+      handleKeys();
+    } catch (const std::exception& e) {
+      report(std::string("UI error: ") + e.what());
+    }
+    {
+      ImGuiIO& io = ImGui::GetIO();
+      const bool interacting = ImGui::IsAnyItemActive() || io.MouseDelta.x != 0.0f || io.MouseDelta.y != 0.0f || io.MouseWheel != 0.0f ||
+                               io.MouseDown[0] || io.MouseDown[1] || io.MouseDown[2] || io.WantTextInput || ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopup);
+      if (interacting) busyFrames_ = 3;
+    }
+    ImGui::Render();
+
+    int fbw, fbh, ww, wh;
+    glfwGetFramebufferSize(window_, &fbw, &fbh);
+    glfwGetWindowSize(window_, &ww, &wh);
+    static const bool trace = std::getenv("CANDELA_TRACE") != nullptr;
+    const auto outputStart = Clock::now();
+    const bool rendered = frame_ && outputDirty_;
+    if (frame_ && outputDirty_) {
+      // At the film's resolution: a preview's few pixels go through OCIO cheaply and are upscaled by
+      // the blit, which matters when the GPU is a software rasteriser sharing the render cores.
+      gl_->renderOutput(frame_->film.width(), frame_->film.height());
+      outputDirty_ = false;
+      if (trace) glFinish();
+    }
+    const auto outputEnd = Clock::now();
+    glViewport(0, 0, fbw, fbh);
+    glClearColor(0.11f, 0.11f, 0.12f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    if (frame_) {
+      const Rect r = imageRect();
+      const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
+      const int x = static_cast<int>(r.x * sx), w = static_cast<int>(r.w * sx), h = static_cast<int>(r.h * sy);
+      const int y = fbh - static_cast<int>((r.y + r.h) * sy);
+      gl_->blitToWindow(x, y, w, h, !frame_->preview && w >= 2 * frame_->width);
+    }
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    glfwSwapBuffers(window_);
+    if (trace && rendered)
+      std::fprintf(stderr, "trace: frame: before output %.1f ms, output %.1f ms, draw+swap %.1f ms\n",
+                   1e3 * std::chrono::duration<double>(outputStart - frameStart).count(),
+                   1e3 * std::chrono::duration<double>(outputEnd - outputStart).count(), 1e3 * secondsSince(outputEnd));
+
+    // Latency: the first image of a request is on screen now.
+    if (latencyRequest_ && frame_ && frame_->request >= latencyRequest_) {
+      lastLatencyMs_ = 1000.0 * secondsSince(latencyStart_);
+      latencies_.push_back(lastLatencyMs_);
+      if (std::getenv("CANDELA_TRACE")) std::fprintf(stderr, "trace: edit->image %.1f ms\n", lastLatencyMs_);
+      for (auto it = measured_.rbegin(); it != measured_.rend(); ++it)
+        if (it->second < 0.0) {
+          it->second = lastLatencyMs_;
+          break;
+        }
+      latencyRequest_ = 0;
+    }
+    frameTimes_.push_back(std::chrono::duration<double>(Clock::now().time_since_epoch()).count());
+    while (frameTimes_.size() > 60) frameTimes_.pop_front();
+    ++measureFrames_;
+    try {
+      scripted();
+    } catch (const std::exception& e) {
+      report(e.what());
+    }
+  }
+  return exitCode_;
+}
+
+}  // namespace
+
+int runViewer(const ViewerOptions& options) {
+  glfwSetErrorCallback([](int code, const char* text) { std::cerr << "candela: GLFW error " << code << ": " << text << "\n"; });
+  if (!glfwInit()) {
+    std::cerr << "candela: cannot initialise GLFW (is there a display? under CI use xvfb-run -a)\n";
+    return 2;
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GL_TRUE);
+  GLFWwindow* window = glfwCreateWindow(options.windowWidth, options.windowHeight, "Candela", nullptr, nullptr);
+  if (!window) {
+    std::cerr << "candela: cannot create an OpenGL 3.3 core window\n";
+    glfwTerminate();
+    return 2;
+  }
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(0);  // our own frame pacing; vsync would add a frame of latency
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // fixed layout; nothing to remember between runs
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window, true);
+  ImGui_ImplOpenGL3_Init("#version 330 core");
+  int code = 0;
+  {
+    Viewer viewer(window, options);
+    code = viewer.run();
+  }
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window);
+  glfwTerminate();
+  return code;
+}
+
+}  // namespace candela

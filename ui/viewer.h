@@ -1,0 +1,35 @@
+// The look-dev viewer: a GLFW window with an OpenGL 3.3 core context and a Dear ImGui UI, showing a
+// RenderSession's progressive image through the OCIO display pipeline. The frame loop follows Dear
+// ImGui's GLFW/OpenGL3 example; rendering and loading never run on this (the UI) thread.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace candela {
+
+struct ViewerOptions {
+  std::string scenePath;              // empty: the default scene (torch-in-mist)
+  std::string preset;                 // --strategy: replaces the scene's strategy
+  std::vector<std::string> settings;  // --set key=value edits
+  std::string ocioConfig;             // --ocio: else $OCIO, else the shipped config
+  int threads = 0;                    // render threads (0: all)
+  int windowWidth = 1500, windowHeight = 820;
+
+  // Scripted use (tests, batch): a screenshot once the image has `afterSpp` samples per pixel
+  // (also the progress limit, so it is exact) or `afterSeconds` of rendering, then maybe quit.
+  std::string screenshotPath;
+  int afterSpp = 0;
+  double afterSeconds = 0.0;
+  bool quit = false;
+  // Scripted edits to time edit-to-first-image and the UI frame rate while rendering.
+  int measureEdits = 0;
+  // Scripted edit applied once the first full frame is shown (a --set style key=value), to test
+  // bad edits in the app.
+  std::vector<std::string> editsAfterStart;
+};
+
+// Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.
+int runViewer(const ViewerOptions& options);
+
+}  // namespace candela
