@@ -132,34 +132,36 @@ void RenderSession::loaderLoop() {
     } catch (const std::exception& e) {
       error = e.what();
     }
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& w : warnings) messages_.push_back("warning: " + w);
-    if (scene) {
-      builtScene_ = scene;
-      builtRequest_ = request.request;
-      if (isOpen) {
-        shownDescUpdate_ = request.desc;
-        // An open replaces whatever the UI was editing.
-        target_ = Target{request.desc, request.request};
-      }
-      cancelPass_ = true;
-      workerWake_.notify_one();
-    } else {
-      messages_.push_back(error + (shownDesc_ ? " (still showing the last good scene)" : ""));
-      workerWake_.notify_one();  // rendering resumes on the last good scene
-      // The UI's fields go back to what is rendering, unless a newer request is queued.
-      if (!buildRequest_) {
-        if (shownDesc_) {
-          shownDescUpdate_ = *shownDesc_;
-          target_ = Target{*shownDesc_, request.request};
-          lastRequested_ = *shownDesc_;
-        } else {
-          lastRequested_.reset();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const auto& w : warnings) messages_.push_back("warning: " + w);
+      if (scene) {
+        builtScene_ = scene;
+        builtRequest_ = request.request;
+        if (isOpen) {
+          shownDescUpdate_ = request.desc;
+          // An open replaces whatever the UI was editing.
+          target_ = Target{request.desc, request.request};
+        }
+        cancelPass_ = true;
+        workerWake_.notify_one();
+      } else {
+        messages_.push_back(error + (shownDesc_ ? " (still showing the last good scene)" : ""));
+        workerWake_.notify_one();  // rendering resumes on the last good scene
+        // The UI's fields go back to what is rendering, unless a newer request is queued.
+        if (!buildRequest_) {
+          if (shownDesc_) {
+            shownDescUpdate_ = *shownDesc_;
+            target_ = Target{*shownDesc_, request.request};
+            lastRequested_ = *shownDesc_;
+          } else {
+            lastRequested_.reset();
+          }
         }
       }
+      if (!buildRequest_) loading_ = false;
     }
-    if (!buildRequest_) loading_ = false;
-    if (notify_) notify_();
+    if (notify_) notify_();  // outside the lock: the callback may query the session
   }
 }
 

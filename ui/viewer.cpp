@@ -86,7 +86,7 @@ class Viewer {
       sceneTime_ = modificationTime(path);
       pendingOpen_ = session_.open(desc);
     } catch (const std::exception& e) {
-      report(e.what());
+      report(std::string(e.what()) + (haveScene_ ? " (still showing the last good scene)" : ""));
       if (!haveScene_) scenePath_ = path;  // watch it, so fixing the file loads it
       sceneTime_ = modificationTime(path);
     }

@@ -1,0 +1,83 @@
+// Checks a viewer screenshot against the CLI's render of the same scene (used by the GUI test):
+//   display_compare GUI.png GUI.exr CLI.exr SPP
+// - the PNG carries the scene, the strategy settings as JSON, the display settings and spp;
+// - the viewer's scene-linear EXR matches the CLI's (same seed and spp: the same samples);
+// - the PNG is a rendered volume (not black, not uniform) and matches the CLI's EXR after the same
+//   OCIO display transform run on the CPU, to within 8-bit quantisation and GPU/CPU rounding.
+#include "color_pipeline.h"
+#include "image_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+using namespace candela;
+
+namespace {
+int failures = 0;
+void check(bool ok, const std::string& what) {
+  std::printf("%s: %s\n", ok ? "ok  " : "FAIL", what.c_str());
+  if (!ok) ++failures;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: display_compare GUI.png GUI.exr CLI.exr SPP\n");
+    return 2;
+  }
+  try {
+    const DisplayImage gui = readDisplayPng(argv[1]);
+    const Image guiExr = readExr(argv[2]);
+    const Image cli = readExr(argv[3]);
+    const int spp = std::stoi(argv[4]);
+
+    // Metadata.
+    for (const char* key : {"scene", "strategy", "settings", "display", "spp", "time_s"})
+      check(gui.metadata.count(key) == 1, std::string("PNG metadata has ") + key);
+    if (failures) return 1;
+    check(gui.metadata.at("spp") == std::to_string(spp), "PNG metadata spp = " + gui.metadata.at("spp"));
+    const Json strategy = Json::parse(gui.metadata.at("strategy"));
+    check(strategy.contains("majorant") && strategy.contains("guiding"), "strategy metadata is the full settings JSON");
+    check(guiExr.metadata.count("strategy") == 1, "EXR metadata has the strategy");
+
+    // Same samples as the CLI.
+    check(gui.width == cli.width && gui.height == cli.height && guiExr.width == cli.width, "sizes match the CLI render");
+    if (failures) return 1;
+    double worst = 0.0;
+    for (size_t i = 0; i < cli.rgb.size(); ++i)
+      worst = std::max(worst, std::abs(static_cast<double>(guiExr.rgb[i]) - cli.rgb[i]) / std::max(1e-3, static_cast<double>(cli.rgb[i])));
+    check(worst < 1e-3, "scene-linear EXR equals the CLI's (worst relative difference " + std::to_string(worst) + ")");
+
+    // A rendered volume.
+    double mean = 0.0, meanSq = 0.0;
+    for (uint8_t v : gui.rgb8) mean += v, meanSq += double(v) * v;
+    mean /= gui.rgb8.size();
+    const double stddev = std::sqrt(std::max(0.0, meanSq / gui.rgb8.size() - mean * mean));
+    check(mean > 1.0, "not black (mean " + std::to_string(mean) + " of 255)");
+    check(stddev > 3.0, "not uniform (std. dev. " + std::to_string(stddev) + ")");
+
+    // The GPU display pass against OCIO's CPU processor with the same settings.
+    const ColorPipeline colors = ColorPipeline::load(gui.metadata.count("ocio_config") ? gui.metadata.at("ocio_config") : "");
+    DisplaySettings display;
+    fromJson(Json::parse(gui.metadata.at("display")), display, argv[1], "display");
+    std::vector<float> expected = cli.rgb;
+    colors.applyCpu(display, expected);
+    std::vector<int> diffs(expected.size());
+    double meanDiff = 0.0;
+    for (size_t i = 0; i < expected.size(); ++i) {
+      diffs[i] = std::abs(int(toDisplayByte(expected[i])) - int(gui.rgb8[i]));
+      meanDiff += diffs[i];
+    }
+    meanDiff /= diffs.size();
+    std::sort(diffs.begin(), diffs.end());
+    const int p999 = diffs[diffs.size() * 999 / 1000];
+    check(meanDiff < 0.5, "PNG matches the CLI render through the same display transform (mean |diff| " + std::to_string(meanDiff) + " of 255)");
+    check(p999 <= 3, "99.9th percentile |diff| " + std::to_string(p999) + " <= 3 of 255 (max " + std::to_string(diffs.back()) + ")");
+  } catch (const std::exception& e) {
+    std::printf("FAIL: %s\n", e.what());
+    return 1;
+  }
+  return failures ? 1 : 0;
+}

@@ -1,0 +1,175 @@
+// The viewer's render session, headless: progressive frames, exact spp limits, live edits restarting
+// with a preview, bad edits and bad scenes keeping the last good scene, and agreement with a batch
+// render of the same seed.
+#include "render_session.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+namespace candela {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Waits (up to `seconds`) for a frame satisfying `pred`.
+template <class Pred>
+std::shared_ptr<const Frame> waitFor(RenderSession& session, Pred pred, double seconds = 30.0) {
+  const auto start = Clock::now();
+  while (std::chrono::duration<double>(Clock::now() - start).count() < seconds) {
+    auto f = session.latest();
+    if (f && pred(*f)) return f;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return nullptr;
+}
+
+SceneDesc smallScene(const std::string& relative) {
+  return test::loadScene(relative, {"camera.resolution=[48,32]"});
+}
+
+TEST(RenderSession, StopsExactlyAtTheSppLimitAndMatchesABatchRender) {
+  const SceneDesc desc = smallScene("assets/scenes/test/slab.json");
+  RenderSession session;
+  session.setLimits(ProgressLimits{13, 0.0f});
+  session.open(desc);
+  auto frame = waitFor(session, [](const Frame& f) { return f.finished; });
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(frame->film.spp(), 13);
+  EXPECT_FALSE(frame->preview);
+  // Same seed, same samples: the batch renderer gives the same image, whatever the pass sizes.
+  const Film batch = test::render(desc, 13);
+  double worst = 0.0;
+  for (int y = 0; y < batch.height(); ++y)
+    for (int x = 0; x < batch.width(); ++x) {
+      const Rgb a = frame->film.mean(x, y), b = batch.mean(x, y);
+      worst = std::max(worst, static_cast<double>(std::abs(a.r - b.r) / std::max(1e-3f, b.r)));
+    }
+  EXPECT_LT(worst, 1e-4);
+}
+
+TEST(RenderSession, EditRestartsWithAPreviewThenRefines) {
+  RenderSession session;
+  // Every published frame, in order (the notification runs on the worker right after publishing).
+  std::mutex mutex;
+  std::vector<std::shared_ptr<const Frame>> frames;
+  session.setNotify([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto f = session.latest();
+    if (f && (frames.empty() || frames.back() != f)) frames.push_back(f);
+  });
+  SceneDesc desc = smallScene("assets/scenes/test/slab.json");
+  session.open(desc);
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return !f.preview && f.film.spp() >= 4; }));
+  desc.strategy = strategyPreset("emission");
+  desc.strategy.majorant.emission_weight = 3.0f;
+  const uint64_t id = session.edit(desc);
+  ASSERT_TRUE(waitFor(session, [&](const Frame& f) { return f.request >= id; }));
+  std::shared_ptr<const Frame> first;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& f : frames)
+      if (f->request >= id) {
+        first = f;
+        break;
+      }
+  }
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(first->preview);
+  EXPECT_LT(first->film.width(), desc.camera.resolution.first);
+  EXPECT_EQ(first->scene->strategy.majorant.emission_weight, 3.0f);
+  auto later = waitFor(session, [&](const Frame& f) { return f.request >= id && !f.preview && f.film.spp() >= 2; });
+  ASSERT_TRUE(later);
+  EXPECT_EQ(later->film.width(), desc.camera.resolution.first);
+}
+
+TEST(RenderSession, VolumeEditRebuildsAndAppliesTheNewValue) {
+  RenderSession session;
+  SceneDesc desc = smallScene("assets/scenes/test/slab.json");
+  session.open(desc);
+  auto before = waitFor(session, [](const Frame& f) { return !f.preview && f.film.spp() >= 8; });
+  ASSERT_TRUE(before);
+  desc.volumes[0].sigma_t_scale *= 4.0f;  // much thicker: the slab gets darker (it absorbs)
+  const uint64_t id = session.edit(desc);
+  auto after = waitFor(session, [&](const Frame& f) { return f.request >= id && !f.preview && f.film.spp() >= 8; });
+  ASSERT_TRUE(after);
+  EXPECT_FLOAT_EQ(after->scene->volumes[0].sigma_t_scale, desc.volumes[0].sigma_t_scale);
+  auto average = [](const Film& film) {
+    double s = 0.0;
+    for (float v : film.meanImage()) s += v;
+    return s;
+  };
+  EXPECT_NE(average(after->film), average(before->film));
+}
+
+TEST(RenderSession, BadEditKeepsTheLastGoodSceneAndRestoresItsFields) {
+  RenderSession session;
+  const SceneDesc good = smallScene("assets/scenes/test/slab.json");
+  session.open(good);
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return !f.preview && f.film.spp() >= 2; }));
+  (void)session.takeShownDesc();
+  SceneDesc bad = good;
+  bad.volumes[0].has_generator = false;
+  bad.volumes[0].file = "does-not-exist.vdb";
+  const uint64_t id = session.edit(bad);
+  // The error arrives as a message naming the file and field; the fields go back.
+  std::vector<std::string> messages;
+  std::optional<SceneDesc> restored;
+  for (int i = 0; i < 3000 && (messages.empty() || !restored); ++i) {
+    for (auto& m : session.takeMessages()) messages.push_back(m);
+    if (!restored) restored = session.takeShownDesc();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages.front().find("does-not-exist.vdb"), std::string::npos) << messages.front();
+  EXPECT_NE(messages.front().find("volumes.0"), std::string::npos) << messages.front();
+  ASSERT_TRUE(restored);
+  EXPECT_TRUE(restored->volumes[0].has_generator);
+  // And the last good scene keeps refining.
+  const int spp = session.latest()->film.spp();
+  EXPECT_TRUE(waitFor(session, [&](const Frame& f) { return f.request >= id && f.film.spp() > spp + 2; }));
+}
+
+TEST(RenderSession, BrokenSceneOpenKeepsTheCurrentScene) {
+  RenderSession session;
+  session.open(smallScene("assets/scenes/test/slab.json"));
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return !f.preview && f.film.spp() >= 2; }));
+  (void)session.takeShownDesc();
+  SceneDesc broken = smallScene("assets/scenes/test/slab.json");
+  broken.path = "/tmp/elsewhere/scene.json";
+  broken.volumes[0].has_generator = false;
+  broken.volumes[0].file = "missing.vdb";
+  session.open(broken);
+  std::vector<std::string> messages;
+  for (int i = 0; i < 3000 && messages.empty(); ++i) {
+    messages = session.takeMessages();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages.front().find("missing.vdb"), std::string::npos);
+  EXPECT_NE(messages.front().find("last good scene"), std::string::npos);
+  auto frame = session.latest();
+  EXPECT_EQ(frame->scene->path, test::assetPath("assets/scenes/test/slab.json"));
+  const int spp = frame->film.spp();
+  EXPECT_TRUE(waitFor(session, [&](const Frame& f) { return f.film.spp() > spp; }));
+}
+
+TEST(RenderSession, SceneDiffSeparatesLiveEditsFromRebuilds) {
+  const SceneDesc a = smallScene("assets/scenes/test/slab.json");
+  SceneDesc b = a;
+  EXPECT_FALSE(diffScenes(a, b).any());
+  b.strategy.majorant.emission_weight = 7.0f;
+  b.camera.fov_y = 30.0f;
+  b.render.max_depth = 3;
+  auto d = diffScenes(a, b);
+  EXPECT_TRUE(d.strategy && d.camera && d.render);
+  EXPECT_FALSE(d.structure);
+  b.volumes[0].g = 0.3f;
+  EXPECT_TRUE(diffScenes(a, b).structure);
+}
+
+}  // namespace
+}  // namespace candela
