@@ -9,7 +9,7 @@ PACKAGES=(
   libopenvdb-dev libboost-iostreams-dev libnanovdb-dev libtbb-dev libembree-dev libglm-dev
   libopenexr-dev libpng-dev nlohmann-json3-dev libcli11-dev
   libglfw3-dev libimgui-dev libopencolorio-dev libgl1-mesa-dri
-  libgtest-dev libbenchmark-dev xvfb xauth
+  libgtest-dev libbenchmark-dev xvfb xauth xdotool
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

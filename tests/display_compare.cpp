@@ -23,6 +23,19 @@ void check(bool ok, const std::string& what) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // display_compare --metadata IMAGE.png KEY: prints one metadata value (for the scripted GUI tests).
+  if (argc == 4 && std::string(argv[1]) == "--metadata") {
+    try {
+      const DisplayImage image = readDisplayPng(argv[2]);
+      auto it = image.metadata.find(argv[3]);
+      if (it == image.metadata.end()) return 1;
+      std::printf("%s\n", it->second.c_str());
+      return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 1;
+    }
+  }
   if (argc != 5) {
     std::fprintf(stderr, "usage: display_compare GUI.png GUI.exr CLI.exr SPP\n");
     return 2;

@@ -69,4 +69,40 @@ elseif(MODE STREQUAL "reload")
       message(FATAL_ERROR "expected the viewer to report \"${expected}\"")
     endif()
   endforeach()
+elseif(MODE STREQUAL "input")
+  # Real input events (xdotool): a left drag on the image tumbles the camera, a drag that starts on
+  # the Parameters panel does not (ImGui wants that mouse), and F frames the volume. The screenshot's
+  # settings metadata says where the camera ended up.
+  file(WRITE ${OUT}/drive.sh
+       "${VIEWER} ${SCENE} --set camera.resolution=[160,90] --screenshot ${OUT}/$1.png --after 3 --quit &
+        sleep 2.5
+        if [ $1 = image ]; then xdotool mousemove 400 400 sleep 0.2 mousedown 1 sleep 0.2 mousemove 450 410 sleep 0.2 mousemove 520 420 sleep 0.2 mouseup 1; fi
+        if [ $1 = panel ]; then xdotool mousemove 1300 600 sleep 0.2 mousedown 1 sleep 0.2 mousemove 1350 610 sleep 0.2 mousemove 1420 620 sleep 0.2 mouseup 1; fi
+        if [ $1 = frame ]; then xdotool mousemove 400 400 sleep 0.2 key f; fi
+        wait $!
+")
+  foreach(case image panel frame)
+    run_checked(${XVFB} sh ${OUT}/drive.sh ${case})
+    execute_process(COMMAND ${COMPARE} --metadata ${OUT}/${case}.png settings OUTPUT_VARIABLE settings RESULT_VARIABLE rc)
+    if(NOT rc EQUAL 0)
+      message(FATAL_ERROR "no settings metadata in ${OUT}/${case}.png")
+    endif()
+    string(JSON position_${case} GET "${settings}" camera position)
+    string(JSON look_at_${case} GET "${settings}" camera look_at)
+    message("${case}: camera position ${position_${case}}, look_at ${look_at_${case}}")
+  endforeach()
+  file(READ ${SCENE} scene_text)
+  string(JSON file_position GET "${scene_text}" camera position)
+  string(JSON file_x GET "${file_position}" 0)
+  string(JSON image_x GET "${position_image}" 0)
+  string(JSON panel_x GET "${position_panel}" 0)
+  if(image_x EQUAL file_x)
+    message(FATAL_ERROR "a drag on the image did not move the camera")
+  endif()
+  if(NOT panel_x EQUAL file_x)
+    message(FATAL_ERROR "a drag on the panel moved the camera (${panel_x} vs ${file_x})")
+  endif()
+  if("${look_at_frame}" STREQUAL "${look_at_panel}")
+    message(FATAL_ERROR "F did not frame the volume (look_at unchanged)")
+  endif()
 endif()

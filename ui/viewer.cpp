@@ -271,6 +271,8 @@ void Viewer::handleCamera() {
   if (dragButton_ < 0 && !io.WantCaptureMouse && r.contains(io.MousePos.x, io.MousePos.y)) {
     for (int b = 0; b < 3; ++b)
       if (io.MouseClicked[b]) dragButton_ = b;
+    // The delta of the click frame may include a jump to where the click happened: not a drag.
+    if (dragButton_ >= 0) return;
   }
   if (dragButton_ >= 0 && !io.MouseDown[dragButton_]) dragButton_ = -1;
   CameraDesc& c = edited_.camera;
@@ -478,10 +480,12 @@ void Viewer::drawStatusBar() {
   if (frameTimes_.size() > 1) fps = (frameTimes_.size() - 1) / (frameTimes_.back() - frameTimes_.front());
   if (frame_) {
     const Film& film = frame_->film;
-    ImGui::Text("%s | %s | %dx%d | %d spp%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %.0f ms | UI %.0f fps%s",
+    char latency[32] = "-";
+    if (!latencies_.empty()) std::snprintf(latency, sizeof(latency), "%.0f ms", lastLatencyMs_);
+    ImGui::Text("%s | %s | %dx%d | %d spp%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %s | UI %.0f fps%s",
                 scenePath_.c_str(), frame_->scene ? frame_->scene->strategy.preset.c_str() : "", frame_->width, frame_->height,
                 frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
-                frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), lastLatencyMs_, fps,
+                frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
                 session_.loading() ? " | loading..." : "");
   } else {
     ImGui::Text("%s | %s", scenePath_.c_str(), session_.loading() ? "loading..." : "no image");
@@ -796,6 +800,8 @@ int runViewer(const ViewerOptions& options) {
     return 2;
   }
   glfwMakeContextCurrent(window);
+  // Keys are polled once a frame; sticky keys keep a press that was released between two frames.
+  glfwSetInputMode(window, GLFW_STICKY_KEYS, GLFW_TRUE);
   glfwSwapInterval(0);  // our own frame pacing; vsync would add a frame of latency
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
