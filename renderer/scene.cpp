@@ -51,7 +51,8 @@ std::vector<LoadedGrid> loadGridsCached(const std::string& path, const std::vect
 
 }  // namespace
 
-std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::string>* warnings) {
+std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::string>* warnings,
+                                    std::shared_ptr<const ProbeSet> servingProbes) {
   namespace fs = std::filesystem;
   if (desc.volumes.size() > static_cast<size_t>(kMaxMedia))
     throw InputError(desc.path + ": volumes: expected at most " + std::to_string(kMaxMedia) + " volumes");
@@ -128,7 +129,14 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
   for (const auto& l : desc.lights) scene->lights_.emplace_back(l);
   scene->buildLightSampler();
   scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
-  if (desc.strategy.guiding.guide == DistanceGuide::Probes) scene->learnProbes();
+  if (desc.strategy.guiding.guide == DistanceGuide::Probes) {
+    if (servingProbes) {
+      std::atomic_store(&scene->probes_, servingProbes);
+      scene->relearnProbesAsync();
+    } else {
+      scene->learnProbes();
+    }
+  }
   return scene;
 }
 

@@ -35,7 +35,12 @@ class Scene {
  public:
   // Loads grids (generating procedural ones into the cache), builds majorants, lights, surfaces.
   // Throws InputError with file/field context; warnings (sanitised voxels) go to `warnings`.
-  static std::shared_ptr<Scene> build(const SceneDesc& desc, std::vector<std::string>* warnings = nullptr);
+  // `servingProbes` (a live edit's previous probes): with probe guiding they serve at once while the
+  // new scene's probes are learned in the background, instead of blocking the build on learning.
+  // Any probe set is a valid sampling density (the floor keeps its support complete), so this
+  // changes noise, never the converged image.
+  static std::shared_ptr<Scene> build(const SceneDesc& desc, std::vector<std::string>* warnings = nullptr,
+                                      std::shared_ptr<const ProbeSet> servingProbes = nullptr);
 
   const SceneDesc& desc() const { return desc_; }
   const Camera& camera() const { return camera_; }

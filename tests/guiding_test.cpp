@@ -127,5 +127,21 @@ TEST(Probes, BackgroundRelearnKeepsTheOldSetServingUntilTheNewOneIsReady) {
   EXPECT_FALSE(before->probes().empty());
 }
 
+// A live volume edit rebuilds the scene: the previous probes serve at once while the new ones learn.
+TEST(Probes, RebuiltSceneServesThePreviousProbesUntilItsOwnAreLearned) {
+  const SceneDesc desc = test::loadScene("assets/scenes/god-rays.json", {"strategy.preset=\"full\"", "camera.resolution=[16,9]"});
+  auto first = Scene::build(desc);
+  const auto serving = first->probes();
+  SceneDesc edited = desc;
+  edited.volumes[0].sigma_t_scale *= 2.0f;
+  auto rebuilt = Scene::build(edited, nullptr, serving);
+  ProgressiveRenderer renderer(rebuilt, RenderOptions{1, 8});
+  Film film;
+  EXPECT_TRUE(renderer.renderPass(film, 1));
+  rebuilt->waitForProbes();
+  EXPECT_NE(rebuilt->probes(), serving);
+  EXPECT_EQ(rebuilt->probes()->placed(), serving->placed());
+}
+
 }  // namespace
 }  // namespace candela

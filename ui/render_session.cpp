@@ -124,9 +124,14 @@ void RenderSession::loaderLoop() {
     std::vector<std::string> warnings;
     std::shared_ptr<Scene> scene;
     std::string error;
+    std::shared_ptr<const ProbeSet> serving;
+    if (!isOpen) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      serving = shownProbes_;
+    }
     try {
       const auto buildStart = std::chrono::steady_clock::now();
-      scene = Scene::build(request.desc, &warnings);
+      scene = Scene::build(request.desc, &warnings, serving);
       if (std::getenv("CANDELA_TRACE"))
         std::fprintf(stderr, "trace: build %.1f ms\n", 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - buildStart).count());
     } catch (const std::exception& e) {
@@ -252,6 +257,7 @@ void RenderSession::workerLoop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       shownDesc_ = std::make_shared<const SceneDesc>(scene->desc());
+      shownProbes_ = scene->probes();
     }
 
     const bool done = (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);

@@ -100,6 +100,7 @@ class RenderSession {
   std::optional<SceneDesc> lastRequested_;  // structure of the newest open or edit
   std::atomic<bool> loading_{false};
   std::shared_ptr<const SceneDesc> shownDesc_;  // desc of the scene the worker renders
+  std::shared_ptr<const ProbeSet> shownProbes_;  // its probes: they serve a rebuilt scene until it learns its own
 
   std::shared_ptr<const Frame> latest_;
   std::vector<std::string> messages_;
