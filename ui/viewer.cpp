@@ -176,6 +176,7 @@ class Viewer {
   std::deque<std::pair<std::string, Clock::time_point>> messages_;
   bool showMessages_ = false, showOpen_ = false;
   std::string openPath_;
+  std::vector<std::string> openCandidates_;
 
   Keys keys_;
   int dragButton_ = -1;
@@ -527,23 +528,26 @@ void Viewer::drawOpenDialog() {
     ImGui::OpenPopup("Open scene");
     showOpen_ = false;
     openPath_ = scenePath_;
+    // Scenes under assets/scenes and beside the current scene, listed once per opening of the dialog.
+    openCandidates_.clear();
+    std::vector<fs::path> roots{fs::path(CANDELA_ASSET_DIR) / "scenes"};
+    if (!scenePath_.empty()) roots.push_back(fs::path(scenePath_).parent_path());
+    for (const auto& root : roots) {
+      std::error_code ec;
+      int depth = 0;
+      for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator() && ++depth < 5000;
+           it.increment(ec))
+        if (it->path().extension() == ".json") openCandidates_.push_back(fs::weakly_canonical(it->path()).string());
+    }
+    std::sort(openCandidates_.begin(), openCandidates_.end());
+    openCandidates_.erase(std::unique(openCandidates_.begin(), openCandidates_.end()), openCandidates_.end());
   }
   ImGui::SetNextWindowSize(ImVec2(640, 420), ImGuiCond_Appearing);
   if (!ImGui::BeginPopupModal("Open scene")) return;
   bool go = ImGui::InputText("path", &openPath_, ImGuiInputTextFlags_EnterReturnsTrue);
   ImGui::TextDisabled("Scenes found:");
   ImGui::BeginChild("scenes", ImVec2(0, -ImGui::GetFrameHeightWithSpacing()), true);
-  std::vector<fs::path> roots{fs::path(CANDELA_ASSET_DIR) / "scenes"};
-  if (!scenePath_.empty()) roots.push_back(fs::path(scenePath_).parent_path());
-  std::vector<std::string> found;
-  for (const auto& root : roots) {
-    std::error_code ec;
-    for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
-      if (it->path().extension() == ".json") found.push_back(fs::weakly_canonical(it->path()).string());
-  }
-  std::sort(found.begin(), found.end());
-  found.erase(std::unique(found.begin(), found.end()), found.end());
-  for (const auto& f : found)
+  for (const auto& f : openCandidates_)
     if (ImGui::Selectable(f.c_str(), f == openPath_, ImGuiSelectableFlags_AllowDoubleClick)) {
       openPath_ = f;
       if (ImGui::IsMouseDoubleClicked(0)) go = true;
@@ -551,7 +555,7 @@ void Viewer::drawOpenDialog() {
   ImGui::EndChild();
   go |= ImGui::Button("Open");
   ImGui::SameLine();
-  if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+  if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) ImGui::CloseCurrentPopup();
   if (go) {
     openScene(openPath_);
     ImGui::CloseCurrentPopup();
