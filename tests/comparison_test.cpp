@@ -1,0 +1,90 @@
+// The equal-time comparison session, headless: interleaved slices give every pane the same time, the
+// error series falls as spp rises, unbiased strategies agree with each other, bad references fail
+// with a clear message.
+#include "comparison_session.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+namespace candela {
+namespace {
+
+std::shared_ptr<const ComparisonFrame> waitUntilDone(ComparisonSession& session, double limit, double timeout = 60.0) {
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < timeout) {
+    auto f = session.latest();
+    if (f && !f->panes.empty() && f->status.empty()) {
+      bool done = true;
+      for (const auto& p : f->panes) done = done && p.seconds >= limit;
+      if (done) return f;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return nullptr;
+}
+
+TEST(Comparison, PanesGetEqualTimeAndTheirErrorFalls) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/glow-box.json", {"camera.resolution=[64,36]"});
+  Image reference;
+  reference.width = 64;
+  reference.height = 36;
+  reference.rgb = test::render(desc, 512).meanImage();
+  ComparisonSession session;
+  session.start(desc, {{"conventional", strategyPreset("conventional")}, {"emission", strategyPreset("emission")}, {"full", strategyPreset("full")}},
+                reference, 0, {}, 1.5);
+  auto frame = waitUntilDone(session, 1.5);
+  ASSERT_TRUE(frame);
+  ASSERT_EQ(frame->panes.size(), 3u);
+  double lo = 1e9, hi = 0.0;
+  for (const auto& p : frame->panes) {
+    lo = std::min(lo, p.seconds);
+    hi = std::max(hi, p.seconds);
+    ASSERT_TRUE(p.film);
+    EXPECT_GT(p.film->spp(), 0);
+    ASSERT_GE(p.series.size(), 3u) << p.label;
+    for (size_t i = 1; i < p.series.size(); ++i) EXPECT_GT(p.series[i].spp, p.series[i - 1].spp);
+    EXPECT_LT(p.series.back().relmse, p.series.front().relmse) << p.label;
+    EXPECT_GT(p.efficiency(), 0.0);
+  }
+  // Equal time to within one slice (slices aim at 60 ms; the limit allows 10%).
+  EXPECT_LT((hi - lo) / hi, 0.10) << lo << " .. " << hi;
+  const std::string csv = comparisonCsv(*frame);
+  EXPECT_NE(csv.find("pane,seconds,spp,mse,relmse,efficiency"), std::string::npos);
+  EXPECT_NE(csv.find("\nfull,"), std::string::npos);
+}
+
+TEST(Comparison, UnbiasedStrategiesAgree) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/slab.json", {"camera.resolution=[32,32]"});
+  ComparisonSession session;
+  session.start(desc, {{"conventional", strategyPreset("conventional")}, {"emission", strategyPreset("emission")}}, {}, 0, {}, 1.5);
+  auto frame = waitUntilDone(session, 1.5);
+  ASSERT_TRUE(frame);
+  for (const auto& p : frame->panes) {
+    EXPECT_TRUE(p.agreementTested) << p.label;
+    EXPECT_TRUE(p.agreement.agree) << p.label << ": " << p.agreement.worst;
+    EXPECT_TRUE(p.series.empty()) << "no reference, no error series";
+  }
+}
+
+TEST(Comparison, AReferenceOfTheWrongSizeIsAClearError) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/slab.json", {"camera.resolution=[32,32]"});
+  Image reference;
+  reference.width = 10;
+  reference.height = 10;
+  reference.rgb.assign(300, 0.5f);
+  ComparisonSession session;
+  session.start(desc, {{"conventional", strategyPreset("conventional")}}, reference);
+  std::vector<std::string> messages;
+  for (int i = 0; i < 2000 && messages.empty(); ++i) {
+    messages = session.takeMessages();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages.front().find("expected a 32x32 image, got 10x10"), std::string::npos) << messages.front();
+}
+
+}  // namespace
+}  // namespace candela

@@ -1,0 +1,191 @@
+#include "comparison_session.h"
+
+#include <chrono>
+#include <sstream>
+
+namespace candela {
+
+ComparisonSession::ComparisonSession(RenderOptions options) : options_(options) {
+  worker_ = std::thread([this] { workerLoop(); });
+}
+
+ComparisonSession::~ComparisonSession() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cancel_ = true;
+  wake_.notify_all();
+  worker_.join();
+}
+
+void ComparisonSession::start(const SceneDesc& scene, const std::vector<PaneSpec>& panes, Image reference, int referenceSpp,
+                              const StrategySettings& referenceStrategy, double timeLimit) {
+  auto r = std::make_unique<Request>();
+  r->scene = scene;
+  r->panes = panes;
+  r->reference = std::move(reference);
+  r->referenceSpp = referenceSpp;
+  r->referenceStrategy = referenceStrategy;
+  r->timeLimit = timeLimit;
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_ = std::move(r);
+  cancel_ = true;
+  wake_.notify_one();
+}
+
+std::shared_ptr<const ComparisonFrame> ComparisonSession::latest() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return latest_;
+}
+
+std::vector<std::string> ComparisonSession::takeMessages() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::exchange(messages_, {});
+}
+
+void ComparisonSession::publish(std::shared_ptr<ComparisonFrame> frame) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    frame->version = latest_ ? latest_->version + 1 : 1;
+    latest_ = std::move(frame);
+  }
+  if (notify_) notify_();
+}
+
+void ComparisonSession::workerLoop() {
+  using Clock = std::chrono::steady_clock;
+  struct Pane {
+    std::shared_ptr<Scene> scene;
+    std::unique_ptr<ProgressiveRenderer> renderer;
+    Film film;
+    int passSpp = 1;
+  };
+  std::vector<Pane> panes;
+  std::shared_ptr<ComparisonFrame> state;  // the working copy, published after each slice
+  std::vector<float> reference;
+  double timeLimit = 0.0;
+  auto lastAgreement = Clock::now();
+
+  for (;;) {
+    std::unique_ptr<Request> request;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      auto allDone = [&] {
+        if (panes.empty()) return true;
+        if (timeLimit <= 0.0) return false;
+        for (const auto& p : state->panes)
+          if (p.seconds < timeLimit) return false;
+        return true;
+      };
+      wake_.wait(lock, [&] { return stop_ || pending_ || !allDone(); });
+      if (stop_) return;
+      request = std::move(pending_);
+      cancel_ = false;
+    }
+    if (request) {
+      panes.clear();
+      state = std::make_shared<ComparisonFrame>();
+      state->status = "building the scenes";
+      publish(std::make_shared<ComparisonFrame>(*state));
+      try {
+        for (const auto& spec : request->panes) {
+          SceneDesc desc = request->scene;
+          desc.strategy = spec.strategy;
+          Pane p;
+          p.scene = Scene::build(desc);
+          p.renderer = std::make_unique<ProgressiveRenderer>(p.scene, options_);
+          panes.push_back(std::move(p));
+          PaneState s;
+          s.label = spec.label;
+          s.strategy = spec.strategy;
+          state->panes.push_back(s);
+        }
+        reference.clear();
+        const int w = request->scene.camera.resolution.first, h = request->scene.camera.resolution.second;
+        if (!request->reference.rgb.empty()) {
+          if (request->reference.width != w || request->reference.height != h)
+            throw InputError("reference: expected a " + std::to_string(w) + "x" + std::to_string(h) + " image, got " +
+                             std::to_string(request->reference.width) + "x" + std::to_string(request->reference.height));
+          reference = request->reference.rgb;
+        } else if (request->referenceSpp > 0) {
+          state->status = "rendering the reference (" + std::to_string(request->referenceSpp) + " spp, " +
+                          request->referenceStrategy.preset + "; cached for next time)";
+          publish(std::make_shared<ComparisonFrame>(*state));
+          reference = cachedReference(request->scene, request->referenceStrategy, request->referenceSpp, options_.threads).rgb;
+        }
+        state->width = w;
+        state->height = h;
+        state->hasReference = !reference.empty();
+        state->status.clear();
+        timeLimit = request->timeLimit;
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        messages_.push_back(std::string("comparison: ") + e.what());
+        panes.clear();
+        state->status = "failed";
+        continue;
+      }
+      publish(std::make_shared<ComparisonFrame>(*state));
+      lastAgreement = Clock::now();
+      continue;
+    }
+    if (panes.empty()) continue;
+
+    // The pane that has had the least time renders next: equal time at every moment, to one slice.
+    size_t next = 0;
+    for (size_t i = 1; i < panes.size(); ++i)
+      if (state->panes[i].seconds < state->panes[next].seconds) next = i;
+    Pane& pane = panes[next];
+    PaneState& ps = state->panes[next];
+    const auto start = Clock::now();
+    if (!pane.renderer->renderPass(pane.film, pane.passSpp, &cancel_)) continue;
+    const double slice = std::chrono::duration<double>(Clock::now() - start).count();
+    ps.seconds += slice;
+    // Slices of about 60 ms: short enough that the panes stay level, long enough to be efficient.
+    if (slice < 0.03) pane.passSpp = std::min(pane.passSpp * 2, 1024);
+    else if (slice > 0.12 && pane.passSpp > 1) pane.passSpp /= 2;
+    ps.film = std::make_shared<const Film>(pane.film);
+    if (!reference.empty()) {
+      const ErrorMetrics e = imageError(pane.film.meanImage(), reference);
+      ps.series.push_back({ps.seconds, pane.film.spp(), e.mse, e.relmse});
+    }
+    // Agreement of region means, every second (it reads every film).
+    if (panes.size() > 1 && std::chrono::duration<double>(Clock::now() - lastAgreement).count() > 1.0) {
+      for (size_t i = 0; i < panes.size(); ++i) {
+        if (panes[i].film.spp() < 4) continue;
+        Agreement all;
+        all.threshold = 0.0;
+        for (size_t j = 0; j < panes.size(); ++j) {
+          if (j == i || panes[j].film.spp() < 4) continue;
+          const Agreement a = compareRenders(panes[i].film, panes[j].film, 8, 8);
+          all.agree = all.agree && a.agree;
+          all.tests += a.tests;
+          all.threshold = a.threshold;
+          if (a.maxAbsZ >= all.maxAbsZ) {
+            all.maxAbsZ = a.maxAbsZ;
+            all.maxRelativeDifference = a.maxRelativeDifference;
+            all.worst = "vs " + state->panes[j].label + ": " + a.worst;
+          }
+        }
+        state->panes[i].agreement = all;
+        state->panes[i].agreementTested = all.tests > 0;
+      }
+      lastAgreement = Clock::now();
+    }
+    publish(std::make_shared<ComparisonFrame>(*state));
+  }
+}
+
+std::string comparisonCsv(const ComparisonFrame& frame) {
+  std::ostringstream out;
+  out << "# relMSE = " << kRelMseFormula << "\n";
+  out << "pane,seconds,spp,mse,relmse,efficiency\n";
+  for (const auto& p : frame.panes)
+    for (const auto& s : p.series)
+      out << p.label << ',' << s.seconds << ',' << s.spp << ',' << s.mse << ',' << s.relmse << ','
+          << (s.relmse > 0.0 ? 1.0 / (s.relmse * s.seconds) : 0.0) << '\n';
+  return out.str();
+}
+
+}  // namespace candela
