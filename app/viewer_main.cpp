@@ -2,10 +2,14 @@
 //   candela [SCENE.json] [--strategy PRESET] [--set key=value ...] [--ocio CONFIG] [--threads N]
 //           [--screenshot OUT.png (--after SECONDS | --after-spp N)] [--quit]
 //           [--measure-latency N] [--edit key=value ...]
+//           [--panes P1,P2,... [--equal-time SECONDS] [--figure OUT.png] [--reference REF.exr | --reference-spp N]]
 #include "settings.h"
 #include "viewer.h"
 
 #include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cstdio>
 
 int main(int argc, char** argv) {
   candela::ViewerOptions o;
@@ -27,7 +31,32 @@ int main(int argc, char** argv) {
   app.add_option("--measure-latency", o.measureEdits, "Make N scripted edits and print edit-to-first-image latency and UI fps")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--edit", o.editsAfterStart, "Apply a key=value edit once the first image is shown (as if typed in the panel)");
+  std::string panes;
+  app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
+  app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(CLI::PositiveNumber);
+  app.add_option("--figure", o.figurePath, "Write the comparison figure (PNG, one EXR per pane, CSV) once --equal-time is reached");
+  app.add_option("--reference", o.referencePath, "Reference EXR for the panes' error series");
+  app.add_option("--reference-spp", o.referenceSpp, "Else render a reference at this spp (cached on disk)")->check(CLI::PositiveNumber);
+  app.add_option("--reference-strategy", o.referenceStrategy, "Strategy preset of the rendered reference (default emission)");
   CLI11_PARSE(app, argc, argv);
+  for (size_t start = 0; start < panes.size();) {
+    const size_t comma = std::min(panes.find(',', start), panes.size());
+    if (comma > start) o.panes.push_back(panes.substr(start, comma - start));
+    start = comma + 1;
+  }
+  if (o.panes.size() > 4) {
+    std::fprintf(stderr, "candela: --panes: expected 1 to 4 strategies, got %zu\n", o.panes.size());
+    return 2;
+  }
+  for (const auto& p : o.panes)
+    if (std::find(candela::strategyPresetNames().begin(), candela::strategyPresetNames().end(), p) == candela::strategyPresetNames().end()) {
+      std::fprintf(stderr, "candela: --panes: unknown strategy preset \"%s\" (expected one of %s)\n", p.c_str(), presets.c_str());
+      return 2;
+    }
+  if (!o.figurePath.empty() && (o.panes.empty() || o.equalTime <= 0.0)) {
+    std::fprintf(stderr, "candela: --figure needs --panes and --equal-time\n");
+    return 2;
+  }
   o.windowHeight = o.windowWidth * 820 / 1500;
   return candela::runViewer(o);
 }

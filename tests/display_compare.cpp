@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
 #include <string>
 
 using namespace candela;
@@ -35,6 +38,65 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", e.what());
       return 1;
     }
+  }
+  // display_compare --figure FIG.png FIG.csv PANES: the scripted comparison figure has PANES labelled
+  // panes with rendered content, equal time shares (within 10%), and a CSV whose spp rises and whose
+  // error falls for every pane.
+  if (argc == 5 && std::string(argv[1]) == "--figure") {
+    try {
+      const DisplayImage fig = readDisplayPng(argv[2]);
+      const int expected = std::stoi(argv[4]);
+      const Json panes = Json::parse(fig.metadata.at("panes"));
+      check(static_cast<int>(panes.size()) == expected, "the figure has " + std::to_string(panes.size()) + " panes");
+      double lo = 1e30, hi = 0.0;
+      for (const auto& p : panes) {
+        lo = std::min(lo, p.at("seconds").get<double>());
+        hi = std::max(hi, p.at("seconds").get<double>());
+        check(p.at("spp").get<int>() > 0 && !p.at("label").get<std::string>().empty(),
+              "pane " + p.at("label").get<std::string>() + ": " + std::to_string(p.at("spp").get<int>()) + " spp, " +
+                  std::to_string(p.at("seconds").get<double>()) + " s");
+      }
+      check((hi - lo) / hi < 0.10, "time shares within 10% (" + std::to_string(lo) + " .. " + std::to_string(hi) + " s)");
+      // Each pane's strip of the figure shows a rendered image: not black, not uniform (below the label band).
+      for (int k = 0; k < expected; ++k) {
+        double sum = 0.0, sumSq = 0.0;
+        int n = 0;
+        for (int y = fig.height / 3; y < fig.height; ++y)
+          for (int x = k * fig.width / expected + 4; x < (k + 1) * fig.width / expected - 4; ++x)
+            for (int c = 0; c < 3; ++c) {
+              const double v = fig.rgb8[3 * (static_cast<size_t>(y) * fig.width + x) + c];
+              sum += v, sumSq += v * v, ++n;
+            }
+        const double mean = sum / n, sd = std::sqrt(std::max(0.0, sumSq / n - mean * mean));
+        check(mean > 0.5 && sd > 2.0, "pane " + std::to_string(k) + " strip: mean " + std::to_string(mean) + ", std. dev. " + std::to_string(sd));
+      }
+      std::ifstream csv(argv[3]);
+      std::string line;
+      std::map<std::string, std::vector<std::pair<int, double>>> series;
+      while (std::getline(csv, line)) {
+        if (line.empty() || line[0] == '#' || line.rfind("pane,", 0) == 0) continue;
+        std::stringstream ss(line);
+        std::string label, seconds, spp, mse, relmse;
+        std::getline(ss, label, ',');
+        std::getline(ss, seconds, ',');
+        std::getline(ss, spp, ',');
+        std::getline(ss, mse, ',');
+        std::getline(ss, relmse, ',');
+        series[label].push_back({std::stoi(spp), std::stod(relmse)});
+      }
+      check(static_cast<int>(series.size()) == expected, "the CSV has a series per pane");
+      for (const auto& [label, points] : series) {
+        bool rising = points.size() >= 2;
+        for (size_t i = 1; i < points.size(); ++i) rising = rising && points[i].first > points[i - 1].first;
+        check(rising, label + ": spp rises over " + std::to_string(points.size()) + " samples");
+        check(points.size() >= 2 && points.back().second < points.front().second,
+              label + ": relMSE falls from " + std::to_string(points.front().second) + " to " + std::to_string(points.back().second));
+      }
+    } catch (const std::exception& e) {
+      std::printf("FAIL: %s\n", e.what());
+      return 1;
+    }
+    return failures ? 1 : 0;
   }
   if (argc != 5) {
     std::fprintf(stderr, "usage: display_compare GUI.png GUI.exr CLI.exr SPP\n");

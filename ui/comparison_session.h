@@ -24,6 +24,9 @@
 
 namespace candela {
 
+// Samples per pixel both panes need before their region means are compared.
+inline constexpr int kAgreementMinSpp = 64;
+
 struct PaneSpec {
   std::string label;  // shown on the pane and in the chart (usually the preset name)
   StrategySettings strategy;

@@ -1,6 +1,8 @@
 #include "viewer.h"
 
 #include "color_pipeline.h"
+#include "comparison_session.h"
+#include "error_chart.h"
 #include "gl_display.h"
 #include "image_io.h"
 #include "param_editor.h"
@@ -16,6 +18,8 @@
 #include <ctime>
 #include <deque>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 #include <iostream>
 #include <thread>
 
@@ -70,6 +74,10 @@ class Viewer {
     applyDisplay();
     if (options.afterSpp > 0) limits_.spp = options.afterSpp;
     session_.setLimits(limits_);
+    if (!options.panes.empty()) {
+      startComparisonMode(options.scenePath.empty() ? defaultScenePath() : options.scenePath);
+      return;
+    }
     openScene(options.scenePath.empty() ? defaultScenePath() : options.scenePath, options.settings, options.preset);
   }
 
@@ -97,6 +105,11 @@ class Viewer {
     try {
       SceneDesc valid = parseSceneDesc(sceneToJson(edited_), edited_.path);
       valid.path = edited_.path;
+      if (compare_) {  // every pane shares the scene and camera: restart them together
+        edited_ = valid;
+        restartComparison();
+        return;
+      }
       beginLatency(session_.edit(valid));
     } catch (const std::exception& e) {
       report(std::string("edit rejected: ") + e.what());
@@ -131,7 +144,41 @@ class Viewer {
     const std::string error = gl_->setPipeline(colors_, display_);
     if (!error.empty()) report(error);
     outputDirty_ = true;
+    for (size_t i = 0; i < paneGl_.size(); ++i) {
+      paneGl_[i]->setPipeline(colors_, display_);
+      paneDirty_[i] = true;
+    }
   }
+
+  // --- equal-time comparison ---
+  void startComparisonMode(const std::string& path) {
+    scenePath_ = path;
+    try {
+      edited_ = fileScene_ = loadSceneDesc(path, options_.settings);
+      sceneTime_ = modificationTime(path);
+      haveScene_ = true;
+      compare_ = std::make_unique<ComparisonSession>(RenderOptions{options_.threads, 32});
+      compare_->setNotify([] { glfwPostEmptyEvent(); });
+      if (!options_.referencePath.empty()) reference_ = readExr(options_.referencePath);
+      restartComparison();
+    } catch (const std::exception& e) {
+      report(e.what());
+    }
+  }
+  void restartComparison() {
+    std::vector<PaneSpec> specs;
+    for (const auto& name : options_.panes) specs.push_back({name, strategyPreset(name, "--panes")});
+    compare_->start(edited_, specs, reference_, reference_.rgb.empty() ? options_.referenceSpp : 0,
+                    strategyPreset(options_.referenceStrategy, "--reference-strategy"), options_.equalTime);
+    figureDone_ = false;
+  }
+  void pollComparison();
+  void drawComparisonPanel();
+  void drawPaneLabels();
+  bool writeFigure(const std::string& path);
+  void captureFigure();
+  std::optional<std::string> figureRequest_;
+  int paneCount() const { return compare_ ? std::max<int>(1, static_cast<int>(options_.panes.size())) : 1; }
 
   void pollSession();
   void pollSceneFile();
@@ -169,6 +216,13 @@ class Viewer {
   SceneDesc edited_;    // what the panels edit
   SceneDesc fileScene_; // as opened (camera reset)
 
+  std::unique_ptr<ComparisonSession> compare_;
+  std::shared_ptr<const ComparisonFrame> compFrame_;
+  uint64_t compVersion_ = 0;
+  std::vector<std::unique_ptr<GlDisplay>> paneGl_;
+  std::vector<bool> paneDirty_;
+  Image reference_;
+  bool figureDone_ = false;
   std::shared_ptr<const Frame> frame_;
   uint64_t uploadedVersion_ = 0;
   bool outputDirty_ = true;
@@ -209,8 +263,12 @@ Viewer::Rect Viewer::imageRect() const {
   int ww, wh;
   glfwGetWindowSize(window_, &ww, &wh);
   Rect area{0.0f, menuHeight_, std::max(1.0f, ww - panelWidth_), std::max(1.0f, wh - menuHeight_ - statusHeight_)};
-  if (!frame_) return area;
-  const float aspect = static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
+  float aspect = 0.0f;
+  if (compare_ && compFrame_ && compFrame_->width > 0)
+    aspect = paneCount() * static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
+  else if (frame_)
+    aspect = static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
+  if (aspect <= 0.0f) return area;
   Rect r = area;
   if (area.w / area.h > aspect) {
     r.w = area.h * aspect;
@@ -240,12 +298,176 @@ void Viewer::pollSession() {
   }
 }
 
+void Viewer::pollComparison() {
+  if (!compare_) return;
+  for (const auto& m : compare_->takeMessages()) report(m);
+  auto latest = compare_->latest();
+  if (!latest || latest->version == compVersion_) return;
+  compFrame_ = latest;
+  compVersion_ = latest->version;
+  while (paneGl_.size() < latest->panes.size()) {
+    paneGl_.push_back(std::make_unique<GlDisplay>());
+    paneGl_.back()->setPipeline(colors_, display_);
+    paneDirty_.push_back(true);
+  }
+  for (size_t i = 0; i < latest->panes.size(); ++i) {
+    const auto& film = latest->panes[i].film;
+    if (!film) continue;
+    paneGl_[i]->uploadImage(film->width(), film->height(), film->meanImage());
+    paneDirty_[i] = true;
+  }
+}
+
+// Each pane's label over its image: strategy, spp, time it got, error and agreement.
+void Viewer::drawPaneLabels() {
+  if (!compFrame_) return;
+  ImDrawList* draw = ImGui::GetForegroundDrawList();
+  const Rect r = imageRect();
+  const size_t n = compFrame_->panes.size();
+  if (!compFrame_->status.empty())
+    draw->AddText(ImVec2(r.x + 10, r.y + 10), IM_COL32(255, 220, 120, 255), compFrame_->status.c_str());
+  for (size_t i = 0; i < n; ++i) {
+    const PaneState& p = compFrame_->panes[i];
+    const float x = r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
+    char line[256];
+    std::snprintf(line, sizeof(line), "%s  %d spp  %.2f s", p.label.c_str(), p.film ? p.film->spp() : 0, p.seconds);
+    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + r.w / n, r.y + 40), IM_COL32(0, 0, 0, 150));
+    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, r.y + 3), paneColor(i), line);
+    std::string second;
+    if (!p.series.empty()) {
+      char e[96];
+      std::snprintf(e, sizeof(e), "relMSE %.3g  eff %.3g  ", p.series.back().relmse, p.efficiency());
+      second = e;
+    }
+    ImU32 agreeColor = IM_COL32(170, 170, 170, 255);
+    if (!p.agreementTested && n > 1) second += "agreement from " + std::to_string(kAgreementMinSpp) + " spp";
+    if (p.agreementTested) {
+      second += p.agreement.agree ? "agrees" : "DISAGREES";
+      agreeColor = p.agreement.agree ? IM_COL32(130, 220, 130, 255) : IM_COL32(255, 80, 70, 255);
+    }
+    draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, second.c_str());
+    if (i > 0) draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(20, 20, 20, 255), 2.0f);
+  }
+}
+
+void Viewer::drawComparisonPanel() {
+  if (!ImGui::CollapsingHeader("Comparison", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  if (!compFrame_) {
+    ImGui::TextDisabled("starting...");
+    return;
+  }
+  for (size_t i = 0; i < compFrame_->panes.size(); ++i) {
+    const PaneState& p = compFrame_->panes[i];
+    ImGui::TextColored(ImColor(paneColor(i)).Value, "%-13s", p.label.c_str());
+    ImGui::SameLine();
+    if (!p.series.empty())
+      ImGui::Text("%6.2f s %5d spp  MSE %.3g  relMSE %.3g  eff %.3g", p.seconds, p.series.back().spp, p.series.back().mse,
+                  p.series.back().relmse, p.efficiency());
+    else
+      ImGui::Text("%6.2f s %5d spp", p.seconds, p.film ? p.film->spp() : 0);
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Efficiency = 1 / (relMSE x time).\n%s\nAgreement: %s (largest |z| %.2f vs threshold %.2f over %d region tests%s%s)",
+                        kRelMseFormula, !p.agreementTested ? "not tested yet" : (p.agreement.agree ? "agrees" : "DISAGREES"),
+                        p.agreement.maxAbsZ, p.agreement.threshold, p.agreement.tests, p.agreement.worst.empty() ? "" : "; worst ",
+                        p.agreement.worst.c_str());
+  }
+  drawErrorChart(*compFrame_, ImVec2(ImGui::GetContentRegionAvail().x, 200.0f));
+  if (ImGui::Button("Export CSV")) {
+    const std::string path = freshPath(fs::path("screenshots") / (fs::path(scenePath_).stem().string() + "-comparison.csv"));
+    std::error_code ec;
+    fs::create_directories("screenshots", ec);
+    std::ofstream(path) << comparisonCsv(*compFrame_);
+    report("wrote " + path);
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Save figure")) writeFigure("");
+  ImGui::SameLine();
+  if (ImGui::Button("Restart")) restartComparison();
+}
+
+bool Viewer::writeFigure(const std::string& path) {
+  if (!compFrame_ || compFrame_->panes.empty()) {
+    report("figure: nothing to compare yet");
+    return false;
+  }
+  figureRequest_ = path.empty() ? freshPath(fs::path("screenshots") / (fs::path(scenePath_).stem().string() + "-comparison.png")) : path;
+  return true;
+}
+
+// Reads the panes and their labels back from the frame just drawn (before the swap): the figure is
+// what the window shows. Writes PATH.png, one EXR per pane and the error series as CSV.
+void Viewer::captureFigure() {
+  const std::string path = *figureRequest_;
+  figureRequest_.reset();
+  try {
+    int fbw, fbh, ww, wh;
+    glfwGetFramebufferSize(window_, &fbw, &fbh);
+    glfwGetWindowSize(window_, &ww, &wh);
+    const Rect r = imageRect();
+    const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
+    const int x = static_cast<int>(r.x * sx), w = static_cast<int>(r.w * sx), h = static_cast<int>(r.h * sy);
+    const int y = fbh - static_cast<int>((r.y + r.h) * sy);
+    DisplayImage image;
+    image.width = w;
+    image.height = h;
+    std::vector<uint8_t> rows(3 * static_cast<size_t>(w) * h);
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(x, y, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+    image.rgb8.resize(rows.size());
+    for (int row = 0; row < h; ++row)  // GL reads bottom-up
+      std::copy_n(rows.begin() + 3 * static_cast<size_t>(h - 1 - row) * w, 3 * static_cast<size_t>(w),
+                  image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
+    Json panes = Json::array();
+    for (const auto& p : compFrame_->panes) {
+      Json j{{"label", p.label}, {"seconds", p.seconds}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
+      if (!p.series.empty()) j["relmse"] = p.series.back().relmse, j["mse"] = p.series.back().mse, j["efficiency"] = p.efficiency();
+      if (p.agreementTested) j["agrees"] = p.agreement.agree;
+      panes.push_back(j);
+    }
+    image.metadata["scene"] = scenePath_;
+    image.metadata["panes"] = panes.dump();
+    image.metadata["settings"] = sceneToJson(edited_).dump();
+    image.metadata["display"] = toJson(colors_.resolve(display_)).dump();
+    if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
+    writeDisplayPng(path, image);
+    const fs::path stem = fs::path(path).replace_extension("");
+    for (const auto& p : compFrame_->panes) {
+      if (!p.film) continue;
+      Image exr;
+      exr.width = p.film->width();
+      exr.height = p.film->height();
+      exr.rgb = p.film->meanImage();
+      exr.metadata = {{"scene", scenePath_}, {"strategy", toJson(p.strategy).dump()}, {"spp", std::to_string(p.film->spp())},
+                      {"time_s", std::to_string(p.seconds)}};
+      writeExr(stem.string() + "-" + p.label + ".exr", exr);
+    }
+    std::ofstream(stem.string() + ".csv") << comparisonCsv(*compFrame_);
+    report("figure: wrote " + path + ", one EXR per pane and " + stem.string() + ".csv");
+    figureDone_ = true;
+  } catch (const std::exception& e) {
+    report(std::string("figure failed: ") + e.what());
+    exitCode_ = 1;
+    figureDone_ = true;
+  }
+}
+
 void Viewer::pollSceneFile() {
   if (secondsSince(lastPoll_) < 0.5 || scenePath_.empty()) return;
   lastPoll_ = Clock::now();
   const auto t = modificationTime(scenePath_);
   if (t != sceneTime_ && t != fs::file_time_type{}) {
     report("reloading " + scenePath_ + " (the file changed)");
+    if (compare_) {
+      sceneTime_ = t;
+      try {
+        edited_ = fileScene_ = loadSceneDesc(scenePath_, options_.settings);
+        restartComparison();
+      } catch (const std::exception& e) {
+        report(std::string(e.what()) + " (still comparing the last good scene)");
+      }
+      return;
+    }
     openScene(scenePath_, sceneSettings_, scenePreset_);
   }
 }
@@ -429,7 +651,8 @@ void Viewer::drawPanel() {
     return;
   }
   bool changed = false;
-  if (ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
+  if (compare_) drawComparisonPanel();
+  if (!compare_ && ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
     ParamEditor editor;
     editor.choices["preset"] = strategyPresetNames();
     edited_.strategy.visit(editor);
@@ -488,6 +711,9 @@ void Viewer::drawStatusBar() {
                 frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
                 frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
                 session_.loading() ? " | loading..." : "");
+  } else if (compare_) {
+    ImGui::Text("%s | equal-time comparison of %d strategies%s | UI %.0f fps", scenePath_.c_str(), paneCount(),
+                compFrame_ && !compFrame_->status.empty() ? (" | " + compFrame_->status).c_str() : "", fps);
   } else {
     ImGui::Text("%s | %s", scenePath_.c_str(), session_.loading() ? "loading..." : "no image");
   }
@@ -611,6 +837,22 @@ bool Viewer::screenshot(const std::string& requestedPath) {
 }
 
 void Viewer::scripted() {
+  if (compare_) {
+    // Scripted comparison: the figure once every pane has had --equal-time seconds.
+    if (!options_.figurePath.empty() && !figureDone_ && !figureRequest_ && compFrame_ && compFrame_->status.empty() &&
+        !compFrame_->panes.empty()) {
+      bool done = options_.equalTime > 0.0;
+      for (const auto& p : compFrame_->panes) done = done && p.film && p.seconds >= options_.equalTime;
+      if (done) writeFigure(options_.figurePath);
+    }
+    if (options_.quit && (options_.figurePath.empty() || figureDone_)) quitNow_ = true;
+    if (options_.quit && !compFrame_ && secondsSince(start_) > 5.0) {
+      report("the comparison could not start; quitting");
+      exitCode_ = 1;
+      quitNow_ = true;
+    }
+    return;
+  }
   const bool fullFrame = frame_ && !frame_->preview && frame_->film.spp() > 0 && !session_.loading();
   if (!fullFrame) {
     // A scripted run whose scene never loads must not wait forever.
@@ -695,7 +937,7 @@ int Viewer::run() {
     // Redraw continuously only while the user interacts (and a few frames after, so ImGui settles);
     // otherwise sleep until an input event or a new image wakes us: the cores stay with the renderer.
     const bool measuring = options_.measureEdits > 0 && measureIndex_ <= options_.measureEdits;
-    if (busyFrames_ > 0 || measuring || !options_.screenshotPath.empty()) {
+    if (busyFrames_ > 0 || measuring || !options_.screenshotPath.empty() || !options_.figurePath.empty()) {
       // At most ~60 fps, but a new image (glfwPostEmptyEvent) or input wakes us at once.
       glfwWaitEventsTimeout(std::max(0.0, targetFrame - secondsSince(lastFrame)));
     } else {
@@ -704,6 +946,7 @@ int Viewer::run() {
     busyFrames_ = std::max(0, busyFrames_ - 1);
     try {
       pollSession();
+      pollComparison();
       pollSceneFile();
     } catch (const std::exception& e) {
       report(e.what());
@@ -717,6 +960,7 @@ int Viewer::run() {
       drawStatusBar();
       drawPanel();
       drawOpenDialog();
+      drawPaneLabels();
       handleCamera();
       handleKeys();
     } catch (const std::exception& e) {
@@ -754,7 +998,22 @@ int Viewer::run() {
       const int y = fbh - static_cast<int>((r.y + r.h) * sy);
       gl_->blitToWindow(x, y, w, h, !frame_->preview && w >= 2 * frame_->width);
     }
+    if (compFrame_ && !compFrame_->panes.empty()) {
+      const Rect r = imageRect();
+      const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
+      const size_t n = compFrame_->panes.size();
+      for (size_t i = 0; i < n && i < paneGl_.size(); ++i) {
+        const auto& film = compFrame_->panes[i].film;
+        if (!film) continue;
+        if (paneDirty_[i]) paneGl_[i]->renderOutput(film->width(), film->height()), paneDirty_[i] = false;
+        const float px = r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
+        const int x = static_cast<int>(px * sx), w = static_cast<int>(r.w / n * sx), h = static_cast<int>(r.h * sy);
+        const int y = fbh - static_cast<int>((r.y + r.h) * sy);
+        paneGl_[i]->blitToWindow(x, y, w, h, false);
+      }
+    }
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    if (figureRequest_) captureFigure();
     glfwSwapBuffers(window_);
     if (trace && rendered)
       std::fprintf(stderr, "trace: frame: before output %.1f ms, output %.1f ms, draw+swap %.1f ms\n",

@@ -22,6 +22,13 @@ struct ViewerOptions {
   int afterSpp = 0;
   double afterSeconds = 0.0;
   bool quit = false;
+  // Equal-time comparison (the talk's Fig. 1): one pane per strategy preset, side by side.
+  std::vector<std::string> panes;
+  double equalTime = 0.0;             // stop every pane at this many seconds (0: never)
+  std::string figurePath;             // write the comparison figure once equalTime is reached
+  std::string referencePath;          // reference EXR for the error series
+  int referenceSpp = 0;               // else render (and cache) a reference at this spp
+  std::string referenceStrategy = "emission";
   // Scripted edits to time edit-to-first-image and the UI frame rate while rendering.
   int measureEdits = 0;
   // Scripted edit applied once the first full frame is shown (a --set style key=value), to test
