@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
   app.add_option("--reference", o.referencePath, "Reference EXR for the panes' error series");
   app.add_option("--reference-spp", o.referenceSpp, "Else render a reference at this spp (cached on disk)")->check(CLI::PositiveNumber);
   app.add_option("--reference-strategy", o.referenceStrategy, "Strategy preset of the rendered reference (default emission)");
+  app.add_flag("--wipe", o.wipe, "With two panes: show them in one frame split by a draggable divider");
+  app.add_option("--pane-view", o.paneView, "What the panes show: image, absolute or relative (error against the reference)")
+      ->check(CLI::IsMember({"image", "absolute", "relative"}));
   CLI11_PARSE(app, argc, argv);
   for (size_t start = 0; start < panes.size();) {
     const size_t comma = std::min(panes.find(',', start), panes.size());
@@ -53,6 +56,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "candela: --panes: unknown strategy preset \"%s\" (expected one of %s)\n", p.c_str(), presets.c_str());
       return 2;
     }
+  // No scene and no other mode: the talk's Fig. 1 live, conventional | + emission | + scattering (MIS).
+  if (o.scenePath.empty() && o.panes.empty() && o.preset.empty() && o.screenshotPath.empty() && o.measureEdits == 0)
+    o.panes = {"conventional", "emission", "full"};
   if (!o.figurePath.empty() && (o.panes.empty() || o.equalTime <= 0.0)) {
     std::fprintf(stderr, "candela: --figure needs --panes and --equal-time\n");
     return 2;

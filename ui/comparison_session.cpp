@@ -117,6 +117,7 @@ void ComparisonSession::workerLoop() {
         state->width = w;
         state->height = h;
         state->hasReference = !reference.empty();
+        if (state->hasReference) state->reference = std::make_shared<const std::vector<float>>(reference);
         state->status.clear();
         timeLimit = request->timeLimit;
       } catch (const std::exception& e) {

@@ -57,6 +57,7 @@ struct ComparisonFrame {
   std::vector<PaneState> panes;
   int width = 0, height = 0;
   bool hasReference = false;
+  std::shared_ptr<const std::vector<float>> reference;  // interleaved RGB, the panes' size
   std::string status;  // "building", "rendering the reference (N spp)", "" while comparing
 };
 

@@ -30,7 +30,9 @@ class GlDisplay {
   // Runs the display pass into the output framebuffer of `width` x `height` pixels.
   void renderOutput(int width, int height);
   // Draws the output into the window rectangle (pixels, origin bottom-left), preserving nothing else.
-  void blitToWindow(int x, int y, int w, int h, bool nearest) const;
+  // [from, to] selects a vertical strip of the output (fractions of its width), drawn into the same
+  // strip of the window rectangle: the wipe view.
+  void blitToWindow(int x, int y, int w, int h, bool nearest, float from = 0.0f, float to = 1.0f) const;
   // The output as 8-bit RGB, top row first (what the window shows, before window scaling).
   std::vector<uint8_t> readOutput() const;
   int outputWidth() const { return outW_; }

@@ -145,7 +145,7 @@ class Viewer {
     if (!error.empty()) report(error);
     outputDirty_ = true;
     for (size_t i = 0; i < paneGl_.size(); ++i) {
-      paneGl_[i]->setPipeline(colors_, display_);
+      paneGl_[i]->setPipeline(colors_, paneDisplay());
       paneDirty_[i] = true;
     }
   }
@@ -157,6 +157,10 @@ class Viewer {
       edited_ = fileScene_ = loadSceneDesc(path, options_.settings);
       sceneTime_ = modificationTime(path);
       haveScene_ = true;
+      for (const auto& name : options_.panes) paneSpecs_.push_back({name, strategyPreset(name, "--panes")});
+      wipe_ = options_.wipe && paneSpecs_.size() == 2;
+      if (options_.paneView == "absolute") paneView_ = PaneView::AbsoluteError;
+      if (options_.paneView == "relative") paneView_ = PaneView::RelativeError;
       compare_ = std::make_unique<ComparisonSession>(RenderOptions{options_.threads, 32});
       compare_->setNotify([] { glfwPostEmptyEvent(); });
       if (!options_.referencePath.empty()) reference_ = readExr(options_.referencePath);
@@ -166,9 +170,7 @@ class Viewer {
     }
   }
   void restartComparison() {
-    std::vector<PaneSpec> specs;
-    for (const auto& name : options_.panes) specs.push_back({name, strategyPreset(name, "--panes")});
-    compare_->start(edited_, specs, reference_, reference_.rgb.empty() ? options_.referenceSpp : 0,
+    compare_->start(edited_, paneSpecs_, reference_, reference_.rgb.empty() ? options_.referenceSpp : 0,
                     strategyPreset(options_.referenceStrategy, "--reference-strategy"), options_.equalTime);
     figureDone_ = false;
   }
@@ -178,7 +180,26 @@ class Viewer {
   bool writeFigure(const std::string& path);
   void captureFigure();
   std::optional<std::string> figureRequest_;
-  int paneCount() const { return compare_ ? std::max<int>(1, static_cast<int>(options_.panes.size())) : 1; }
+  int paneCount() const { return compare_ ? std::max<int>(1, static_cast<int>(paneSpecs_.size())) : 1; }
+  std::vector<PaneSpec> paneSpecs_;
+  enum class PaneView { Image, AbsoluteError, RelativeError };
+  PaneView paneView_ = PaneView::Image;
+  std::string referenceInput_;
+  int referenceSppInput_ = 256;
+  std::string referenceStrategyInput_ = "emission";
+  void uploadPanes();
+  // Error views are false colour: shown through the config's raw view when it has one.
+  DisplaySettings paneDisplay() const {
+    if (paneView_ == PaneView::Image || !compFrame_ || !compFrame_->reference) return display_;
+    DisplaySettings raw;
+    raw.display = colors_.resolve(display_).display;
+    for (const auto& v : colors_.views(raw.display))
+      if (v == "Raw") raw.view = v;
+    return raw.view.empty() ? display_ : raw;
+  }
+  bool wipe_ = false;       // two panes in one frame, split at wipePosition_
+  float wipePosition_ = 0.5f;
+  bool draggingWipe_ = false;
 
   void pollSession();
   void pollSceneFile();
@@ -265,7 +286,7 @@ Viewer::Rect Viewer::imageRect() const {
   Rect area{0.0f, menuHeight_, std::max(1.0f, ww - panelWidth_), std::max(1.0f, wh - menuHeight_ - statusHeight_)};
   float aspect = 0.0f;
   if (compare_ && compFrame_ && compFrame_->width > 0)
-    aspect = paneCount() * static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
+    aspect = (wipe_ ? 1 : paneCount()) * static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
   else if (frame_)
     aspect = static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
   if (aspect <= 0.0f) return area;
@@ -303,17 +324,54 @@ void Viewer::pollComparison() {
   for (const auto& m : compare_->takeMessages()) report(m);
   auto latest = compare_->latest();
   if (!latest || latest->version == compVersion_) return;
+  const bool referenceChanged = !compFrame_ || (compFrame_->reference != nullptr) != (latest->reference != nullptr);
   compFrame_ = latest;
   compVersion_ = latest->version;
+  if (referenceChanged) applyDisplay();  // the error views switch to the raw view once a reference exists
   while (paneGl_.size() < latest->panes.size()) {
     paneGl_.push_back(std::make_unique<GlDisplay>());
-    paneGl_.back()->setPipeline(colors_, display_);
+    paneGl_.back()->setPipeline(colors_, paneDisplay());
     paneDirty_.push_back(true);
   }
-  for (size_t i = 0; i < latest->panes.size(); ++i) {
-    const auto& film = latest->panes[i].film;
+  uploadPanes();
+}
+
+// False colour for the error views: black, blue, green, yellow, red, white over t in [0, 1].
+static void falseColour(float t, float* rgb) {
+  static const float ramp[6][3] = {{0, 0, 0}, {0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.3f}, {0.95f, 0.9f, 0.1f}, {0.95f, 0.15f, 0.1f}, {1, 1, 1}};
+  t = std::clamp(t, 0.0f, 1.0f) * 5.0f;
+  const int k = std::min(4, static_cast<int>(t));
+  const float f = t - k;
+  for (int c = 0; c < 3; ++c) rgb[c] = ramp[k][c] * (1 - f) + ramp[k + 1][c] * f;
+}
+
+void Viewer::uploadPanes() {
+  if (!compFrame_) return;
+  const bool error = paneView_ != PaneView::Image && compFrame_->reference;
+  double meanReference = 0.0;
+  if (error) {
+    for (float v : *compFrame_->reference) meanReference += v;
+    meanReference = std::max(1e-12, meanReference / compFrame_->reference->size());
+  }
+  for (size_t i = 0; i < compFrame_->panes.size() && i < paneGl_.size(); ++i) {
+    const auto& film = compFrame_->panes[i].film;
     if (!film) continue;
-    paneGl_[i]->uploadImage(film->width(), film->height(), film->meanImage());
+    std::vector<float> image = film->meanImage();
+    if (error && image.size() == compFrame_->reference->size()) {
+      const std::vector<float>& ref = *compFrame_->reference;
+      // Per pixel, averaged over channels: |I - R| / mean(R) (absolute) or |I - R| / sqrt(R^2 + eps)
+      // with the relMSE's eps (relative); log scale from 1e-2 to 1e1, shown through the raw view.
+      const double eps = 0.01 * meanReference * meanReference;
+      for (size_t p = 0; p < image.size(); p += 3) {
+        double e = 0.0;
+        for (int c = 0; c < 3; ++c) {
+          const double d = std::abs(image[p + c] - ref[p + c]);
+          e += paneView_ == PaneView::AbsoluteError ? d / meanReference : d / std::sqrt(ref[p + c] * ref[p + c] + eps);
+        }
+        falseColour(static_cast<float>((std::log10(std::max(1e-6, e / 3.0)) + 2.0) / 3.0), &image[p]);
+      }
+    }
+    paneGl_[i]->uploadImage(film->width(), film->height(), image);
     paneDirty_[i] = true;
   }
 }
@@ -326,12 +384,19 @@ void Viewer::drawPaneLabels() {
   const size_t n = compFrame_->panes.size();
   if (!compFrame_->status.empty())
     draw->AddText(ImVec2(r.x + 10, r.y + 10), IM_COL32(255, 220, 120, 255), compFrame_->status.c_str());
+  const bool wipe = wipe_ && n == 2;
+  if (wipe) {
+    const float x = r.x + r.w * wipePosition_;
+    draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(255, 255, 255, 200), 2.0f);
+    draw->AddCircleFilled(ImVec2(x, r.y + r.h * 0.5f), 6.0f, IM_COL32(255, 255, 255, 220));
+  }
   for (size_t i = 0; i < n; ++i) {
     const PaneState& p = compFrame_->panes[i];
-    const float x = r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
+    const float x = wipe ? (i == 0 ? r.x : r.x + r.w * 0.5f) : r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
     char line[256];
     std::snprintf(line, sizeof(line), "%s  %d spp  %.2f s", p.label.c_str(), p.film ? p.film->spp() : 0, p.seconds);
     draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + r.w / n, r.y + 40), IM_COL32(0, 0, 0, 150));
+    if (wipe && i == 1) draw->AddText(ImVec2(x + r.w / n - 60, r.y + 3), paneColor(i), "(right)");
     draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, r.y + 3), paneColor(i), line);
     std::string second;
     if (!p.series.empty()) {
@@ -346,7 +411,7 @@ void Viewer::drawPaneLabels() {
       agreeColor = p.agreement.agree ? IM_COL32(130, 220, 130, 255) : IM_COL32(255, 80, 70, 255);
     }
     draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, second.c_str());
-    if (i > 0) draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(20, 20, 20, 255), 2.0f);
+    if (i > 0 && !wipe) draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(20, 20, 20, 255), 2.0f);
   }
 }
 
@@ -372,6 +437,81 @@ void Viewer::drawComparisonPanel() {
                         p.agreement.worst.c_str());
   }
   drawErrorChart(*compFrame_, ImVec2(ImGui::GetContentRegionAvail().x, 200.0f));
+  // Each pane's strategy: a preset plus any edits, generated like the single view's Strategy panel.
+  bool restart = false;
+  int remove = -1;
+  for (size_t i = 0; i < paneSpecs_.size(); ++i) {
+    ImGui::PushID(static_cast<int>(i));
+    const bool open = ImGui::TreeNodeEx("pane", 0, "pane %zu: %s", i + 1, paneSpecs_[i].label.c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("This pane's strategy settings; any edit restarts every pane (equal time)");
+    if (open) {
+      ParamEditor editor;
+      editor.choices["preset"] = strategyPresetNames();
+      paneSpecs_[i].strategy.visit(editor);
+      if (!editor.presetChosen.empty()) paneSpecs_[i].strategy = strategyPreset(editor.presetChosen);
+      if (editor.changed) {
+        paneSpecs_[i].label = paneSpecs_[i].strategy.preset + (toJson(paneSpecs_[i].strategy) == toJson(strategyPreset(paneSpecs_[i].strategy.preset)) ? "" : "*");
+        restart = true;
+      }
+      if (paneSpecs_.size() > 1 && ImGui::Button("Remove pane")) remove = static_cast<int>(i);
+      ImGui::TreePop();
+    }
+    ImGui::PopID();
+  }
+  if (remove >= 0) paneSpecs_.erase(paneSpecs_.begin() + remove), restart = true;
+  if (paneSpecs_.size() < 4 && ImGui::Button("Add pane")) {
+    paneSpecs_.push_back({"emission", strategyPreset("emission")});
+    restart = true;
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Up to four panes; each starts as the emission preset");
+  {
+    const char* views[] = {"image", "absolute error", "relative error"};
+    int view = static_cast<int>(paneView_);
+    if (ImGui::Combo("pane view", &view, views, 3)) {
+      paneView_ = static_cast<PaneView>(view);
+      applyDisplay();
+      uploadPanes();
+    }
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Error views need a reference. False colour, log scale 0.01 (black) to 10 (white):\n"
+                        "absolute |I - R| / mean(R); relative |I - R| / sqrt(R^2 + eps), eps as in relMSE");
+    ImGui::InputText("reference EXR", &referenceInput_);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Path of a scene-linear EXR of this scene and camera, at the panes' resolution");
+    ImGui::SameLine();
+    if (ImGui::Button("Load")) {
+      try {
+        reference_ = readExr(referenceInput_);
+        restartComparison();
+      } catch (const std::exception& e) {
+        report(e.what());
+      }
+    }
+    ImGui::DragInt("reference spp", &referenceSppInput_, 4.0f, 1, 1 << 20, "%d", ImGuiSliderFlags_AlwaysClamp);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Render a reference at this spp before the panes restart; cached on disk by scene and settings hash");
+    if (ImGui::BeginCombo("reference strategy", referenceStrategyInput_.c_str())) {
+      for (const auto& name : strategyPresetNames())
+        if (ImGui::Selectable(name.c_str(), name == referenceStrategyInput_)) referenceStrategyInput_ = name;
+      ImGui::EndCombo();
+    }
+    if (ImGui::Button("Render reference")) {
+      reference_ = Image();
+      options_.referenceSpp = referenceSppInput_;
+      options_.referenceStrategy = referenceStrategyInput_;
+      restartComparison();
+    }
+  }
+  if (paneSpecs_.size() == 2) {
+    ImGui::SameLine();
+    ImGui::Checkbox("Wipe", &wipe_);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Show both panes in one frame, split by a divider you drag on the image");
+  } else {
+    wipe_ = false;
+  }
+  if (restart) {
+    paneGl_.clear();
+    paneDirty_.clear();
+    restartComparison();
+  }
   if (ImGui::Button("Export CSV")) {
     const std::string path = freshPath(fs::path("screenshots") / (fs::path(scenePath_).stem().string() + "-comparison.csv"));
     std::error_code ec;
@@ -490,6 +630,18 @@ void Viewer::handleCamera() {
   ImGuiIO& io = ImGui::GetIO();
   if (!haveScene_) return;
   const Rect r = imageRect();
+  // In wipe mode a left drag near the divider moves it (the panes stay in sync: one frame).
+  if (compare_ && wipe_) {
+    const float divider = r.x + r.w * wipePosition_;
+    if (!draggingWipe_ && dragButton_ < 0 && !io.WantCaptureMouse && io.MouseClicked[0] && r.contains(io.MousePos.x, io.MousePos.y) &&
+        std::abs(io.MousePos.x - divider) < 8.0f)
+      draggingWipe_ = true;
+    if (draggingWipe_) {
+      if (!io.MouseDown[0]) draggingWipe_ = false;
+      wipePosition_ = std::clamp((io.MousePos.x - r.x) / std::max(1.0f, r.w), 0.0f, 1.0f);
+      return;
+    }
+  }
   // Start a drag only on the image and only when ImGui does not want the mouse.
   if (dragButton_ < 0 && !io.WantCaptureMouse && r.contains(io.MousePos.x, io.MousePos.y)) {
     for (int b = 0; b < 3; ++b)
@@ -638,7 +790,7 @@ void Viewer::drawPanel() {
       applyDisplay();
     }
   }
-  if (ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) {
+  if (!compare_ && ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) {
     ParamEditor editor;
     limits_.visit(editor);
     if (editor.changed) session_.setLimits(limits_);
@@ -1002,14 +1154,20 @@ int Viewer::run() {
       const Rect r = imageRect();
       const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
       const size_t n = compFrame_->panes.size();
+      const bool wipe = wipe_ && n == 2;
       for (size_t i = 0; i < n && i < paneGl_.size(); ++i) {
         const auto& film = compFrame_->panes[i].film;
         if (!film) continue;
         if (paneDirty_[i]) paneGl_[i]->renderOutput(film->width(), film->height()), paneDirty_[i] = false;
+        const int y = fbh - static_cast<int>((r.y + r.h) * sy), h = static_cast<int>(r.h * sy);
+        if (wipe) {
+          // Pane 1 left of the divider, pane 2 right of it, in the same frame.
+          const float a = i == 0 ? 0.0f : wipePosition_, b = i == 0 ? wipePosition_ : 1.0f;
+          paneGl_[i]->blitToWindow(static_cast<int>(r.x * sx), y, static_cast<int>(r.w * sx), h, false, a, b);
+          continue;
+        }
         const float px = r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
-        const int x = static_cast<int>(px * sx), w = static_cast<int>(r.w / n * sx), h = static_cast<int>(r.h * sy);
-        const int y = fbh - static_cast<int>((r.y + r.h) * sy);
-        paneGl_[i]->blitToWindow(x, y, w, h, false);
+        paneGl_[i]->blitToWindow(static_cast<int>(px * sx), y, static_cast<int>(r.w / n * sx), h, false);
       }
     }
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());

@@ -29,6 +29,8 @@ struct ViewerOptions {
   std::string referencePath;          // reference EXR for the error series
   int referenceSpp = 0;               // else render (and cache) a reference at this spp
   std::string referenceStrategy = "emission";
+  bool wipe = false;                  // two panes: one frame with a divider
+  std::string paneView = "image";     // image | absolute | relative (error views need a reference)
   // Scripted edits to time edit-to-first-image and the UI frame rate while rendering.
   int measureEdits = 0;
   // Scripted edit applied once the first full frame is shown (a --set style key=value), to test
