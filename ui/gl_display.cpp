@@ -208,14 +208,16 @@ void GlDisplay::renderOutput(int width, int height) {
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
-void GlDisplay::blitToWindow(int x, int y, int w, int h, bool nearest, float from, float to) const {
+void GlDisplay::blitToWindow(int x, int y, int w, int h, bool nearest, ViewWindow view, float from, float to) const {
   if (!outW_) return;
   glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-  const int sx0 = static_cast<int>(from * outW_ + 0.5f), sx1 = static_cast<int>(to * outW_ + 0.5f);
+  auto lerp = [](float a, float b, float t) { return a + (b - a) * t; };
+  const int sx0 = static_cast<int>(lerp(view.u0, view.u1, from) * outW_ + 0.5f), sx1 = static_cast<int>(lerp(view.u0, view.u1, to) * outW_ + 0.5f);
+  const int sy0 = static_cast<int>(view.v0 * outH_ + 0.5f), sy1 = static_cast<int>(view.v1 * outH_ + 0.5f);
   const int dx0 = x + static_cast<int>(from * w + 0.5f), dx1 = x + static_cast<int>(to * w + 0.5f);
   // The output's row 0 is the image's top row: flip it onto the window (GL's origin is bottom-left).
-  glBlitFramebuffer(sx0, 0, sx1, outH_, dx0, y + h, dx1, y, GL_COLOR_BUFFER_BIT, nearest ? GL_NEAREST : GL_LINEAR);
+  glBlitFramebuffer(sx0, sy0, sx1, sy1, dx0, y + h, dx1, y, GL_COLOR_BUFFER_BIT, nearest ? GL_NEAREST : GL_LINEAR);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
 }
 

@@ -15,6 +15,11 @@
 
 namespace candela {
 
+// The part of the image shown: a zoomed view shows [u0, u1] x [v0, v1] of it (fractions, v down).
+struct ViewWindow {
+  float u0 = 0.0f, v0 = 0.0f, u1 = 1.0f, v1 = 1.0f;
+};
+
 class GlDisplay {
  public:
   GlDisplay();
@@ -30,9 +35,9 @@ class GlDisplay {
   // Runs the display pass into the output framebuffer of `width` x `height` pixels.
   void renderOutput(int width, int height);
   // Draws the output into the window rectangle (pixels, origin bottom-left), preserving nothing else.
-  // [from, to] selects a vertical strip of the output (fractions of its width), drawn into the same
-  // strip of the window rectangle: the wipe view.
-  void blitToWindow(int x, int y, int w, int h, bool nearest, float from = 0.0f, float to = 1.0f) const;
+  // [from, to] selects a vertical strip of the window rectangle (fractions of its width) and draws
+  // the matching strip of the view there: the wipe view.
+  void blitToWindow(int x, int y, int w, int h, bool nearest, ViewWindow view = ViewWindow(), float from = 0.0f, float to = 1.0f) const;
   // The output as 8-bit RGB, top row first (what the window shows, before window scaling).
   std::vector<uint8_t> readOutput() const;
   int outputWidth() const { return outW_; }

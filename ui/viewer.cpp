@@ -219,6 +219,23 @@ class Viewer {
     bool contains(float px, float py) const { return px >= x && py >= y && px < x + w && py < y + h; }
   };
   Rect imageRect() const;
+  // Image zoom and pan (2D, on the displayed image; every pane shares it, so they stay in sync).
+  ViewWindow view_;
+  float zoom_ = 1.0f;
+  ImVec2 viewCenter_{0.5f, 0.5f};
+  void updateView() {
+    zoom_ = std::clamp(zoom_, 1.0f, 64.0f);
+    const float half = 0.5f / zoom_;
+    viewCenter_.x = std::clamp(viewCenter_.x, half, 1.0f - half);
+    viewCenter_.y = std::clamp(viewCenter_.y, half, 1.0f - half);
+    view_ = {viewCenter_.x - half, viewCenter_.y - half, viewCenter_.x + half, viewCenter_.y + half};
+  }
+  // Image coordinates (fractions, v down) under a window point, through the zoom (one pane's rect
+  // for side-by-side panes).
+  ImVec2 imageUv(const Rect& r, ImVec2 p) const {
+    float fx = (p.x - r.x) / std::max(1.0f, r.w), fy = (p.y - r.y) / std::max(1.0f, r.h);
+    return ImVec2(view_.u0 + fx * (view_.u1 - view_.u0), view_.v0 + fy * (view_.v1 - view_.v0));
+  }
 
   GLFWwindow* window_;
   ViewerOptions options_;
@@ -630,6 +647,30 @@ void Viewer::handleCamera() {
   ImGuiIO& io = ImGui::GetIO();
   if (!haveScene_) return;
   const Rect r = imageRect();
+  // Ctrl+wheel zooms the image about the cursor, Shift+drag pans it, 0 fits it again (2D only: the
+  // camera and the render do not change, so accumulation goes on).
+  if (!io.WantCaptureMouse && r.contains(io.MousePos.x, io.MousePos.y) && io.KeyCtrl && io.MouseWheel != 0.0f) {
+    Rect pane = r;
+    if (compare_ && !wipe_ && paneCount() > 1) {
+      pane.w = r.w / paneCount();
+      pane.x = r.x + pane.w * std::floor((io.MousePos.x - r.x) / pane.w);
+    }
+    const ImVec2 before = imageUv(pane, io.MousePos);
+    zoom_ *= std::exp(io.MouseWheel * 0.2f);
+    updateView();
+    const ImVec2 after = imageUv(pane, io.MousePos);
+    viewCenter_.x += before.x - after.x;
+    viewCenter_.y += before.y - after.y;
+    updateView();
+    return;
+  }
+  if (io.KeyShift && dragButton_ < 0 && !io.WantCaptureMouse && io.MouseDown[0] && r.contains(io.MousePos.x, io.MousePos.y)) {
+    const float paneW = compare_ && !wipe_ ? r.w / paneCount() : r.w;
+    viewCenter_.x -= io.MouseDelta.x / std::max(1.0f, paneW) / zoom_;
+    viewCenter_.y -= io.MouseDelta.y / std::max(1.0f, r.h) / zoom_;
+    updateView();
+    return;
+  }
   // In wipe mode a left drag near the divider moves it (the panes stay in sync: one frame).
   if (compare_ && wipe_) {
     const float divider = r.x + r.w * wipePosition_;
@@ -694,7 +735,8 @@ void Viewer::handleKeys() {
   // Query every key each frame so edges are tracked even while a text field has focus.
   const bool f = keys_.pressed(window_, GLFW_KEY_F), r = keys_.pressed(window_, GLFW_KEY_R), home = keys_.pressed(window_, GLFW_KEY_HOME),
              l = keys_.pressed(window_, GLFW_KEY_L), s = keys_.pressed(window_, GLFW_KEY_S), f12 = keys_.pressed(window_, GLFW_KEY_F12),
-             c = keys_.pressed(window_, GLFW_KEY_C), o = keys_.pressed(window_, GLFW_KEY_O), e = keys_.pressed(window_, GLFW_KEY_E);
+             c = keys_.pressed(window_, GLFW_KEY_C), o = keys_.pressed(window_, GLFW_KEY_O), e = keys_.pressed(window_, GLFW_KEY_E),
+             zero = keys_.pressed(window_, GLFW_KEY_0);
   if (io.WantCaptureKeyboard) return;
   if (f && haveScene_) frameVolume();
   if ((r || home) && haveScene_) {
@@ -705,8 +747,9 @@ void Viewer::handleKeys() {
     readoutLocked_ = !readoutLocked_;
     if (readoutLocked_ && frame_) {
       const Rect rect = imageRect();
-      lockedX_ = std::clamp(static_cast<int>((io.MousePos.x - rect.x) / rect.w * frame_->width), 0, frame_->width - 1);
-      lockedY_ = std::clamp(static_cast<int>((io.MousePos.y - rect.y) / rect.h * frame_->height), 0, frame_->height - 1);
+      const ImVec2 uv = imageUv(rect, io.MousePos);
+      lockedX_ = std::clamp(static_cast<int>(uv.x * frame_->width), 0, frame_->width - 1);
+      lockedY_ = std::clamp(static_cast<int>(uv.y * frame_->height), 0, frame_->height - 1);
     }
   }
   if (f12 || (s && !ctrl)) screenshot("");
@@ -719,6 +762,7 @@ void Viewer::handleKeys() {
     applyDisplay();
   }
   if (o && ctrl) showOpen_ = true;
+  if (zero) zoom_ = 1.0f, viewCenter_ = ImVec2(0.5f, 0.5f), updateView();
 }
 
 void Viewer::drawMenuBar() {
@@ -763,6 +807,7 @@ void Viewer::drawMenuBar() {
   if (ImGui::BeginMenu("Help")) {
     ImGui::MenuItem("Messages", nullptr, &showMessages_);
     ImGui::TextDisabled("Mouse on the image: left tumble, middle track, right dolly, wheel dolly (Alt optional)");
+    ImGui::TextDisabled("Image: Ctrl+wheel zoom, Shift+left drag pan, 0 fit (all panes together)");
     ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot");
     ImGui::EndMenu();
   }
@@ -876,8 +921,9 @@ void Viewer::drawStatusBar() {
   if (readoutLocked_) {
     px = lockedX_, py = lockedY_;
   } else if (frame_ && r.contains(io.MousePos.x, io.MousePos.y)) {
-    px = static_cast<int>((io.MousePos.x - r.x) / r.w * frame_->width);
-    py = static_cast<int>((io.MousePos.y - r.y) / r.h * frame_->height);
+    const ImVec2 uv = imageUv(r, io.MousePos);
+    px = static_cast<int>(uv.x * frame_->width);
+    py = static_cast<int>(uv.y * frame_->height);
   }
   if (frame_ && px >= 0 && px < frame_->width && py >= 0 && py < frame_->height) {
     const Film& film = frame_->film;
@@ -1148,7 +1194,7 @@ int Viewer::run() {
       const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
       const int x = static_cast<int>(r.x * sx), w = static_cast<int>(r.w * sx), h = static_cast<int>(r.h * sy);
       const int y = fbh - static_cast<int>((r.y + r.h) * sy);
-      gl_->blitToWindow(x, y, w, h, !frame_->preview && w >= 2 * frame_->width);
+      gl_->blitToWindow(x, y, w, h, !frame_->preview && w >= 2 * frame_->width * (view_.u1 - view_.u0), view_);
     }
     if (compFrame_ && !compFrame_->panes.empty()) {
       const Rect r = imageRect();
@@ -1163,11 +1209,11 @@ int Viewer::run() {
         if (wipe) {
           // Pane 1 left of the divider, pane 2 right of it, in the same frame.
           const float a = i == 0 ? 0.0f : wipePosition_, b = i == 0 ? wipePosition_ : 1.0f;
-          paneGl_[i]->blitToWindow(static_cast<int>(r.x * sx), y, static_cast<int>(r.w * sx), h, false, a, b);
+          paneGl_[i]->blitToWindow(static_cast<int>(r.x * sx), y, static_cast<int>(r.w * sx), h, false, view_, a, b);
           continue;
         }
         const float px = r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
-        paneGl_[i]->blitToWindow(static_cast<int>(px * sx), y, static_cast<int>(r.w / n * sx), h, false);
+        paneGl_[i]->blitToWindow(static_cast<int>(px * sx), y, static_cast<int>(r.w / n * sx), h, false, view_);
       }
     }
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
