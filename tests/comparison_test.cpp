@@ -69,6 +69,29 @@ TEST(Comparison, UnbiasedStrategiesAgree) {
   }
 }
 
+// A biased pane is the odd one out: two independent renders of the slab agree with each other, and a
+// render of a slightly different slab (standing in for a biased estimator) disagrees with both.
+TEST(Comparison, ABiasedPaneIsTheOddOneOut) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/slab.json", {"camera.resolution=[32,32]"});
+  const Film a = test::render(desc, 128);
+  SceneDesc other = desc;
+  other.render.seed = 7;
+  const Film b = test::render(other, 128);
+  other.render.seed = 11;
+  other.volumes[0].sigma_t_scale *= 1.3f;  // transmittance e^-1.3 against e^-1: about 7 standard errors per 4x4-pixel region at 128 spp
+  const Film biased = test::render(other, 128);
+  const auto fair = paneAgreement({&a, &b});
+  EXPECT_TRUE(fair[0].agree && fair[1].agree) << fair[0].worst;
+  const auto three = paneAgreement({&a, &b, &biased});
+  EXPECT_TRUE(three[0].agree) << three[0].worst;
+  EXPECT_TRUE(three[1].agree) << three[1].worst;
+  EXPECT_FALSE(three[2].agree) << "the biased render must be flagged";
+  EXPECT_NE(three[2].worst.find("pane "), std::string::npos);
+  // Below the minimum spp nothing is tested.
+  const Film few = test::render(desc, 4);
+  EXPECT_EQ(paneAgreement({&few, &a})[0].tests, 0);
+}
+
 TEST(Comparison, AReferenceOfTheWrongSizeIsAClearError) {
   const SceneDesc desc = test::loadScene("assets/scenes/test/slab.json", {"camera.resolution=[32,32]"});
   Image reference;

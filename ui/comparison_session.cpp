@@ -156,31 +156,47 @@ void ComparisonSession::workerLoop() {
     // a pair is tested only from kAgreementMinSpp on. A pane is flagged when it disagrees with every
     // pane it was tested against: a biased strategy is the odd one out, the others still agree.
     if (panes.size() > 1 && std::chrono::duration<double>(Clock::now() - lastAgreement).count() > 1.0) {
+      std::vector<const Film*> films;
+      for (const auto& p : panes) films.push_back(&p.film);
+      const auto results = paneAgreement(films);
       for (size_t i = 0; i < panes.size(); ++i) {
-        if (panes[i].film.spp() < kAgreementMinSpp) continue;
-        Agreement all;
-        int partners = 0, disagreements = 0;
-        for (size_t j = 0; j < panes.size(); ++j) {
-          if (j == i || panes[j].film.spp() < kAgreementMinSpp) continue;
-          const Agreement a = compareRenders(panes[i].film, panes[j].film, 8, 8);
-          ++partners;
-          disagreements += a.agree ? 0 : 1;
-          all.tests += a.tests;
-          all.threshold = a.threshold;
-          if (a.maxAbsZ >= all.maxAbsZ) {
-            all.maxAbsZ = a.maxAbsZ;
-            all.maxRelativeDifference = a.maxRelativeDifference;
-            all.worst = "vs " + state->panes[j].label + ": " + a.worst;
-          }
+        state->panes[i].agreement = results[i];
+        state->panes[i].agreementTested = results[i].tests > 0;
+        if (!results[i].worst.empty()) {
+          // Name the partner by its label rather than its index.
+          const size_t at = results[i].worst.find(':');
+          const size_t j = std::stoul(results[i].worst.substr(5, at - 5));
+          state->panes[i].agreement.worst = "vs " + state->panes[j].label + results[i].worst.substr(at);
         }
-        all.agree = partners == 0 || disagreements < partners;
-        state->panes[i].agreement = all;
-        state->panes[i].agreementTested = partners > 0;
       }
       lastAgreement = Clock::now();
     }
     publish(std::make_shared<ComparisonFrame>(*state));
   }
+}
+
+std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films) {
+  std::vector<Agreement> out(films.size());
+  for (size_t i = 0; i < films.size(); ++i) {
+    if (films[i]->spp() < kAgreementMinSpp) continue;
+    Agreement& all = out[i];
+    int partners = 0, disagreements = 0;
+    for (size_t j = 0; j < films.size(); ++j) {
+      if (j == i || films[j]->spp() < kAgreementMinSpp) continue;
+      const Agreement a = compareRenders(*films[i], *films[j], 8, 8);
+      ++partners;
+      disagreements += a.agree ? 0 : 1;
+      all.tests += a.tests;
+      all.threshold = a.threshold;
+      if (a.maxAbsZ >= all.maxAbsZ) {
+        all.maxAbsZ = a.maxAbsZ;
+        all.maxRelativeDifference = a.maxRelativeDifference;
+        all.worst = "pane " + std::to_string(j) + ": " + a.worst;
+      }
+    }
+    all.agree = partners == 0 || disagreements < partners;
+  }
+  return out;
 }
 
 std::string comparisonCsv(const ComparisonFrame& frame) {
