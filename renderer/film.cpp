@@ -12,6 +12,8 @@ void Film::resize(int width, int height) {
   sum_.assign(n, 0.0f);
   sumSq_.assign(n, 0.0f);
   rowRejected_.assign(static_cast<size_t>(height), 0);
+  rowMax_.assign(static_cast<size_t>(height), 0.0f);
+  maxSample_ = 0.0f;
   spp_ = 0;
   rejected_ = 0;
 }
@@ -49,6 +51,8 @@ void Film::addPass(const Film& pass) {
     sumSq_[i] += pass.sumSq_[i];
   }
   spp_ += pass.spp_;
+  maxSample_ = std::max(maxSample_, pass.maxSample_);
+  for (float m : pass.rowMax_) maxSample_ = std::max(maxSample_, m);
   rejected_ += std::accumulate(pass.rowRejected_.begin(), pass.rowRejected_.end(), uint64_t{0}) + pass.rejected_;
 }
 

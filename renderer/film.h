@@ -5,6 +5,7 @@
 
 #include "core.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -20,6 +21,8 @@ class Film {
   int height() const { return height_; }
   int spp() const { return spp_; }                     // samples per pixel accumulated
   uint64_t rejectedSamples() const { return rejected_; }
+  // The largest single accepted sample (any channel): the firefly measure of the stability suite.
+  float maxSample() const { return maxSample_; }
 
   Rgb mean(int x, int y) const;
   // Standard error of the pixel mean, per channel.
@@ -39,6 +42,8 @@ class Film {
       ++rejectedLocal(y);
       return false;
     }
+    float& rowMax = rowMax_[static_cast<size_t>(y)];
+    rowMax = std::max(rowMax, std::max(value.r, std::max(value.g, value.b)));
     sum_[i] += value.r;
     sum_[i + 1] += value.g;
     sum_[i + 2] += value.b;
@@ -54,6 +59,8 @@ class Film {
   uint64_t& rejectedLocal(int y) { return rowRejected_[static_cast<size_t>(y)]; }
   int width_ = 0, height_ = 0, spp_ = 0;
   uint64_t rejected_ = 0;
+  float maxSample_ = 0.0f;
+  std::vector<float> rowMax_;
   std::vector<float> sum_, sumSq_;
   std::vector<uint64_t> rowRejected_;
 };

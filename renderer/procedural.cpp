@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -170,6 +171,11 @@ void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path) {
           s = cloud(q, noise, gen.seed);
         } else if (gen.type == "plume") {
           s = plume(q, noise);
+        } else if (gen.type == "invalid") {
+          // A deliberately broken grid for the stability suite: a constant box in which every 7th
+          // voxel is NaN and every 11th negative. Loading must sanitise these, with a warning.
+          const size_t n = (static_cast<size_t>(k) * dims.y + j) * dims.x + i;
+          s.density = n % 7 == 0 ? std::numeric_limits<float>::quiet_NaN() : (n % 11 == 0 ? -gen.value : gen.value);
         } else {
           throw InputError("generator.type: unknown generator \"" + gen.type + "\"");
         }
@@ -197,7 +203,8 @@ void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path) {
       for (int j = 0; j < dims.y; ++j)
         for (int i = 0; i < dims.x; ++i) {
           const size_t idx = (static_cast<size_t>(k) * dims.y + j) * dims.x + i;
-          if (density[idx] > 1e-6f) dAcc.setValue(openvdb::Coord(i, j, k), density[idx]);
+          const bool invalidOnPurpose = gen.type == "invalid" && (std::isnan(density[idx]) || density[idx] < 0.0f);
+          if (density[idx] > 1e-6f || invalidOnPurpose) dAcc.setValue(openvdb::Coord(i, j, k), density[idx]);
           if (temperature[idx] > 1e-6f) tAcc.setValue(openvdb::Coord(i, j, k), temperature[idx]);
         }
   }

@@ -39,7 +39,7 @@ struct GeneratorDesc {
 
   template <class V>
   void visit(V& v) {
-    v.required("type", type, "constant, ramp, torch, mist, cloud or plume");
+    v.required("type", type, "constant, ramp, torch, mist, cloud, plume, or invalid (NaN and negative voxels, for the stability suite)");
     v.field("seed", seed, "Noise seed");
     v.field("resolution", resolution, "Voxels along the longest axis", Range{2, 1024});
     v.field("size", size, "World extent of the grid (before the transform)", Range{1e-4, 1e6});

@@ -25,11 +25,11 @@ void checkVolume(const VolumeDesc& v, const std::string& file, const std::string
   if (v.file.empty() == !v.has_generator)
     throw InputError(file + ": " + path + ": expected exactly one of \"file\" or \"generator\"");
   if (v.has_generator) {
-    static const char* types[] = {"constant", "ramp", "torch", "mist", "cloud", "plume"};
+    static const char* types[] = {"constant", "ramp", "torch", "mist", "cloud", "plume", "invalid"};
     bool known = false;
     for (const char* t : types) known |= v.generator.type == t;
     if (!known)
-      throw InputError(file + ": " + path + ".generator.type: expected one of constant, ramp, torch, mist, cloud, plume, got \"" +
+      throw InputError(file + ": " + path + ".generator.type: expected one of constant, ramp, torch, mist, cloud, plume, invalid, got \"" +
                        v.generator.type + "\"");
   }
   if (v.emission.mode == EmissionMode::Blackbody && !v.has_generator && v.temperature_grid.empty())
