@@ -9,6 +9,8 @@
 #include "renderer.h"
 #include "scene.h"
 
+#include "report.h"
+
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -249,8 +251,15 @@ int main(int argc, char** argv) {
   g->add_option("--value", gen.value, "constant/ramp density");
   g->add_option("--temperature", gen.temperature, "constant/ramp temperature");
 
+  bool quick = false;
+  auto* rep = app.add_subcommand("report", "Speed-versus-accuracy report: every scene x strategy at equal time, plus the stability suite (DIR/index.html)");
+  rep->add_flag("--quick", quick, "Lower resolution and budgets (CI: under 5 minutes on 2 cores)");
+  rep->add_option("-o,--output", out, "Output directory")->required();
+  rep->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
+
   CLI11_PARSE(app, argc, argv);
   try {
+    if (rep->parsed()) return runReport(quick, out, threads);
     if (r->parsed()) return render(scenePath, out, spp, seconds, seed, threads, preset, sets);
     if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets, sweep);
     if (g->parsed()) {

@@ -1,0 +1,261 @@
+#include "report.h"
+
+#include "convergence.h"
+#include "image_io.h"
+#include "renderer.h"
+#include "scene.h"
+#include "settings.h"
+#include "stability.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <iomanip>
+#include <sstream>
+#include <thread>
+
+namespace candela {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const uint32_t v = (uint8_t(bytes[i]) << 16) | (uint8_t(bytes[i + 1]) << 8) | uint8_t(bytes[i + 2]);
+    for (int k = 3; k >= 0; --k) out += table[(v >> (6 * k)) & 63];
+  }
+  if (i + 1 == bytes.size()) {
+    const uint32_t v = uint8_t(bytes[i]) << 16;
+    out += table[(v >> 18) & 63], out += table[(v >> 12) & 63], out += "==";
+  } else if (i + 2 == bytes.size()) {
+    const uint32_t v = (uint8_t(bytes[i]) << 16) | (uint8_t(bytes[i + 1]) << 8);
+    out += table[(v >> 18) & 63], out += table[(v >> 12) & 63], out += table[(v >> 6) & 63], out += '=';
+  }
+  return out;
+}
+
+// An inline <img> of an 8-bit image.
+std::string pngTag(const DisplayImage& image, const std::string& tmp, const std::string& alt) {
+  writeDisplayPng(tmp, image);
+  return "<img alt=\"" + alt + "\" src=\"data:image/png;base64," + base64(readFile(tmp)) + "\">";
+}
+
+DisplayImage srgbImage(int w, int h, const std::vector<float>& rgb) {
+  DisplayImage d;
+  d.width = w, d.height = h;
+  d.rgb8.resize(rgb.size());
+  for (size_t i = 0; i < rgb.size(); ++i) d.rgb8[i] = static_cast<uint8_t>(std::lround(255.0f * srgbEncode(rgb[i])));
+  return d;
+}
+
+void falseColour(float t, uint8_t* out) {
+  static const float ramp[6][3] = {{0, 0, 0}, {0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.3f}, {0.95f, 0.9f, 0.1f}, {0.95f, 0.15f, 0.1f}, {1, 1, 1}};
+  t = std::clamp(t, 0.0f, 1.0f) * 5.0f;
+  const int k = std::min(4, static_cast<int>(t));
+  const float f = t - k;
+  for (int c = 0; c < 3; ++c) out[c] = static_cast<uint8_t>(255.0f * (ramp[k][c] * (1 - f) + ramp[k + 1][c] * f));
+}
+
+// Relative error per pixel, |I - R| / sqrt(R^2 + eps) (eps as in relMSE), false colour, log 0.01..10.
+DisplayImage errorMap(int w, int h, const std::vector<float>& image, const std::vector<float>& ref) {
+  double mean = 0.0;
+  for (float v : ref) mean += v;
+  mean = std::max(1e-12, mean / ref.size());
+  const double eps = 0.01 * mean * mean;
+  DisplayImage d;
+  d.width = w, d.height = h;
+  d.rgb8.resize(image.size());
+  for (size_t p = 0; p < image.size(); p += 3) {
+    double e = 0.0;
+    for (int c = 0; c < 3; ++c) e += std::abs(image[p + c] - ref[p + c]) / std::sqrt(double(ref[p + c]) * ref[p + c] + eps);
+    falseColour(static_cast<float>((std::log10(std::max(1e-6, e / 3.0)) + 2.0) / 3.0), &d.rgb8[p]);
+  }
+  return d;
+}
+
+const uint8_t kStrategyColours[4][3] = {{230, 120, 90}, {90, 170, 230}, {120, 210, 110}, {220, 200, 90}};
+
+struct Run {
+  std::string strategy;
+  Film film;          // at the largest budget
+  double seconds = 0.0;
+  ErrorMetrics error;
+};
+
+std::string html(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '<' ? std::string("&lt;") : c == '>' ? std::string("&gt;") : c == '&' ? std::string("&amp;") : std::string(1, c);
+  return out;
+}
+
+}  // namespace
+
+int runReport(bool quick, const std::string& dir, int threads) {
+  const auto start = Clock::now();
+  fs::create_directories(dir);
+  const std::string tmp = (fs::path(dir) / ".tmp.png").string();
+  const std::string assets = std::string(CANDELA_SOURCE_DIR) + "/assets/scenes/";
+  const std::vector<std::string> scenes{"torch-in-mist", "fire", "god-rays", "cloud"};
+  const std::vector<std::string>& presets = strategyPresetNames();
+  const std::vector<double> budgets = quick ? std::vector<double>{0.25, 0.5, 1.0} : std::vector<double>{1.0, 2.0, 4.0, 8.0};
+  const int divisor = quick ? 4 : 2;
+  const int referenceSpp = quick ? 256 : 2048;
+
+  std::ostringstream body, headlineMd;
+  std::string headlineSvg;
+  body << "<h2>Equal-time convergence</h2><p>Budgets " ;
+  for (double b : budgets) body << b << " s ";
+  body << "per strategy; references rendered with <code>emission</code> at " << referenceSpp << " spp (cached). "
+       << html(kRelMseFormula) << ". Efficiency = 1 / (relMSE x time) at the largest budget.</p>\n";
+
+  for (const auto& name : scenes) {
+    SceneDesc base = loadSceneDesc(assets + name + ".json");
+    base.camera.resolution = {std::max(8, base.camera.resolution.first / divisor), std::max(8, base.camera.resolution.second / divisor)};
+    std::printf("report: %s at %dx%d: reference...\n", name.c_str(), base.camera.resolution.first, base.camera.resolution.second);
+    std::fflush(stdout);
+    const Image reference = cachedReference(base, strategyPreset("emission"), referenceSpp, threads);
+    std::vector<ConvergencePoint> points;
+    std::vector<Run> runs;
+    for (const auto& preset : presets) {
+      SceneDesc desc = base;
+      desc.strategy = strategyPreset(preset);
+      desc.render.seed = 17;
+      auto scene = Scene::build(desc);
+      ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
+      Run run;
+      run.strategy = preset;
+      for (double budget : budgets) {
+        Film film;
+        const double t = renderer.renderBudget(film, 1 << 24, budget, 1);
+        const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
+        points.push_back({preset, budget, t, film.spp(), e.mse, e.relmse, film.rejectedSamples()});
+        if (budget == budgets.back()) run.film = film, run.seconds = t, run.error = e;
+      }
+      std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), preset.c_str(), run.error.relmse, run.seconds, run.film.spp());
+      std::fflush(stdout);
+      runs.push_back(std::move(run));
+    }
+    const std::string svgPath = (fs::path(dir) / (name + ".svg")).string();
+    writeConvergenceSvg(svgPath, points, name + ": relMSE vs time (equal time, 2 cores)");
+    const std::string svg = readFile(svgPath);
+    fs::remove(svgPath);
+
+    const int w = base.camera.resolution.first, h = base.camera.resolution.second;
+    body << "<h3>" << name << "</h3>\n<div class=row>" << svg << "<table><tr><th>strategy</th><th>spp</th><th>relMSE</th><th>efficiency</th><th>vs conventional</th></tr>";
+    const double baseEff = 1.0 / (runs[0].error.relmse * runs[0].seconds);
+    std::ostringstream table;
+    table << "| strategy | spp | relMSE | efficiency 1/(relMSE x t) | vs conventional |\n|---|---|---|---|---|\n";
+    for (const auto& run : runs) {
+      const double eff = 1.0 / (run.error.relmse * run.seconds);
+      char row[256];
+      std::snprintf(row, sizeof(row), "<tr><td>%s</td><td>%d</td><td>%.4g</td><td>%.4g</td><td>x%.2f</td></tr>", run.strategy.c_str(), run.film.spp(),
+                    run.error.relmse, eff, eff / baseEff);
+      body << row;
+      std::snprintf(row, sizeof(row), "| %s | %d | %.4g | %.4g | x%.2f |\n", run.strategy.c_str(), run.film.spp(), run.error.relmse, eff, eff / baseEff);
+      table << row;
+    }
+    body << "</table></div>\n<div class=row>";
+    for (const auto& run : runs)
+      body << "<figure>" << pngTag(srgbImage(w, h, run.film.meanImage()), tmp, run.strategy) << pngTag(errorMap(w, h, run.film.meanImage(), reference.rgb), tmp, run.strategy + " error")
+           << "<figcaption>" << run.strategy << ", " << run.film.spp() << " spp in " << std::fixed << std::setprecision(2) << run.seconds
+           << " s<br>relative error (false colour, 0.01 black to 10 white)</figcaption></figure>";
+    body << std::defaultfloat;
+    // Which strategy wins where: per 8x8 block, the largest 1/(block relMSE x time).
+    const int block = 8;
+    DisplayImage win;
+    win.width = w, win.height = h;
+    win.rgb8.assign(3 * size_t(w) * h, 0);
+    std::vector<int> wins(runs.size(), 0);
+    for (int by = 0; by < h; by += block)
+      for (int bx = 0; bx < w; bx += block) {
+        int best = 0;
+        double bestEff = -1.0;
+        for (size_t s = 0; s < runs.size(); ++s) {
+          std::vector<float> a, r;
+          for (int y = by; y < std::min(h, by + block); ++y)
+            for (int x = bx; x < std::min(w, bx + block); ++x)
+              for (int c = 0; c < 3; ++c) {
+                a.push_back(runs[s].film.mean(x, y)[c]);
+                r.push_back(reference.rgb[3 * (size_t(y) * w + x) + c]);
+              }
+          const double e = imageError(a, r).relmse;
+          const double eff = e > 0.0 ? 1.0 / (e * runs[s].seconds) : 1e30;
+          if (eff > bestEff) bestEff = eff, best = static_cast<int>(s);
+        }
+        ++wins[best];
+        for (int y = by; y < std::min(h, by + block); ++y)
+          for (int x = bx; x < std::min(w, bx + block); ++x)
+            for (int c = 0; c < 3; ++c) win.rgb8[3 * (size_t(y) * w + x) + c] = kStrategyColours[best % 4][c];
+      }
+    body << "<figure>" << pngTag(win, tmp, "winner map") << "<figcaption>most efficient strategy per 8x8 block (itself a noisy estimate at short budgets): ";
+    for (size_t s = 0; s < runs.size(); ++s)
+      body << "<span style=\"color:rgb(" << int(kStrategyColours[s][0]) << "," << int(kStrategyColours[s][1]) << "," << int(kStrategyColours[s][2])
+           << ")\">&#9632; " << runs[s].strategy << " (" << wins[s] << ")</span> ";
+    body << "</figcaption></figure></div>\n";
+    if (name == "torch-in-mist") headlineSvg = svg, headlineMd << table.str();
+  }
+
+  // The stability suite.
+  body << "<h2>Stability</h2><p>Every preset against <code>conventional</code> on cases where a method is known to be weak "
+          "(region z-test, 2x2 regions, Bonferroni, alpha 1e-3). Detectable bias: the median over regions of threshold x combined "
+          "standard error / mean. Relative variance: mean per-sample variance / mean^2. Largest sample: the firefly measure.</p>\n"
+          "<table><tr><th>case</th><th>weak for</th><th>strategy</th><th>agrees</th><th>|z| / threshold</th><th>detectable bias</th>"
+          "<th>rejected</th><th>relative variance</th><th>largest sample</th><th>time</th></tr>\n";
+  const int spp = quick ? 256 : 1024;
+  int disagreements = 0;
+  for (const auto& c : loadStabilityCases(assets + "stability/cases.json")) {
+    Film conventional;
+    const StabilityResult base = runStability(c, "conventional", 4 * spp, nullptr, &conventional, threads);
+    std::vector<StabilityResult> results{base};
+    for (const auto& preset : presets)
+      if (preset != "conventional") results.push_back(runStability(c, preset, spp, &conventional, nullptr, threads));
+    for (const auto& r : results) {
+      disagreements += r.agrees ? 0 : 1;
+      char row[512];
+      std::snprintf(row, sizeof(row),
+                    "<tr><td>%s</td><td>%s</td><td>%s</td><td style=\"color:%s\">%s</td><td>%.2f / %.2f</td><td>%.2f%%</td><td>%llu</td><td>%.3g</td>"
+                    "<td>%.3g</td><td>%.1f s</td></tr>\n",
+                    r.caseName.c_str(), html(c.weakness).c_str(), r.preset.c_str(), r.agrees ? "#7c7" : "#f55",
+                    r.preset == "conventional" ? "(baseline)" : (r.agrees ? "yes" : "NO"), r.maxAbsZ, r.threshold, 100.0 * r.detectableBias,
+                    static_cast<unsigned long long>(r.rejected), r.relativeVariance, r.maxSample, r.seconds);
+      body << row;
+    }
+    std::printf("report: stability %s done\n", c.name.c_str());
+    std::fflush(stdout);
+  }
+  body << "</table>\n";
+  fs::remove(tmp);
+
+  const double total = std::chrono::duration<double>(Clock::now() - start).count();
+  std::ofstream page(fs::path(dir) / "index.html");
+  page << "<!doctype html><html><head><meta charset=utf-8><title>Candela: speed versus accuracy</title><style>"
+          "body{font-family:sans-serif;background:#1b1b1e;color:#ddd;margin:2em} table{border-collapse:collapse;margin:1em}"
+          "td,th{border:1px solid #444;padding:3px 8px;font-size:13px} .row{display:flex;flex-wrap:wrap;align-items:flex-start}"
+          "figure{margin:6px} figure img{display:block;image-rendering:pixelated;width:320px} figcaption{font-size:12px;color:#aaa}"
+          "svg{background:#fff}</style></head><body><h1>Candela: speed versus accuracy</h1><p>"
+       << (quick ? "Quick report" : "Full report") << ", generated in " << std::fixed << std::setprecision(1) << total
+       << " s on " << std::thread::hardware_concurrency() << " hardware threads. Stability disagreements: " << disagreements
+       << ".</p>" << body.str() << "</body></html>\n";
+  std::ofstream(fs::path(dir) / "headline.svg") << headlineSvg;
+  std::ofstream(fs::path(dir) / "headline.md") << headlineMd.str();
+  std::printf("report: wrote %s/index.html in %.1f s (%d stability disagreements)\n", dir.c_str(), total, disagreements);
+  return disagreements == 0 ? 0 : 3;
+}
+
+}  // namespace candela
