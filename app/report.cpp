@@ -64,28 +64,12 @@ DisplayImage srgbImage(int w, int h, const std::vector<float>& rgb) {
   return d;
 }
 
-void falseColour(float t, uint8_t* out) {
-  static const float ramp[6][3] = {{0, 0, 0}, {0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.3f}, {0.95f, 0.9f, 0.1f}, {0.95f, 0.15f, 0.1f}, {1, 1, 1}};
-  t = std::clamp(t, 0.0f, 1.0f) * 5.0f;
-  const int k = std::min(4, static_cast<int>(t));
-  const float f = t - k;
-  for (int c = 0; c < 3; ++c) out[c] = static_cast<uint8_t>(255.0f * (ramp[k][c] * (1 - f) + ramp[k + 1][c] * f));
-}
-
-// Relative error per pixel, |I - R| / sqrt(R^2 + eps) (eps as in relMSE), false colour, log 0.01..10.
 DisplayImage errorMap(int w, int h, const std::vector<float>& image, const std::vector<float>& ref) {
-  double mean = 0.0;
-  for (float v : ref) mean += v;
-  mean = std::max(1e-12, mean / ref.size());
-  const double eps = 0.01 * mean * mean;
   DisplayImage d;
   d.width = w, d.height = h;
-  d.rgb8.resize(image.size());
-  for (size_t p = 0; p < image.size(); p += 3) {
-    double e = 0.0;
-    for (int c = 0; c < 3; ++c) e += std::abs(image[p + c] - ref[p + c]) / std::sqrt(double(ref[p + c]) * ref[p + c] + eps);
-    falseColour(static_cast<float>((std::log10(std::max(1e-6, e / 3.0)) + 2.0) / 3.0), &d.rgb8[p]);
-  }
+  const std::vector<float> colours = errorFalseColour(image, ref, true);
+  d.rgb8.resize(colours.size());
+  for (size_t i = 0; i < colours.size(); ++i) d.rgb8[i] = static_cast<uint8_t>(std::lround(255.0f * colours[i]));
   return d;
 }
 
@@ -182,10 +166,12 @@ int runReport(bool quick, const std::string& dir, int threads) {
     win.width = w, win.height = h;
     win.rgb8.assign(3 * size_t(w) * h, 0);
     std::vector<int> wins(runs.size(), 0);
+    int ties = 0;
     for (int by = 0; by < h; by += block)
       for (int bx = 0; bx < w; bx += block) {
         int best = 0;
         double bestEff = -1.0;
+        bool signal = false;  // blocks with nothing to estimate (every strategy exact) are a tie
         for (size_t s = 0; s < runs.size(); ++s) {
           std::vector<float> a, r;
           for (int y = by; y < std::min(h, by + block); ++y)
@@ -195,19 +181,21 @@ int runReport(bool quick, const std::string& dir, int threads) {
                 r.push_back(reference.rgb[3 * (size_t(y) * w + x) + c]);
               }
           const double e = imageError(a, r).relmse;
+          signal |= e > 0.0;
           const double eff = e > 0.0 ? 1.0 / (e * runs[s].seconds) : 1e30;
           if (eff > bestEff) bestEff = eff, best = static_cast<int>(s);
         }
-        ++wins[best];
+        if (signal) ++wins[best];
+        else ++ties;
         for (int y = by; y < std::min(h, by + block); ++y)
           for (int x = bx; x < std::min(w, bx + block); ++x)
-            for (int c = 0; c < 3; ++c) win.rgb8[3 * (size_t(y) * w + x) + c] = kStrategyColours[best % 4][c];
+            for (int c = 0; c < 3; ++c) win.rgb8[3 * (size_t(y) * w + x) + c] = signal ? kStrategyColours[best % 4][c] : 60;
       }
     body << "<figure>" << pngTag(win, tmp, "winner map") << "<figcaption>most efficient strategy per 8x8 block (itself a noisy estimate at short budgets): ";
     for (size_t s = 0; s < runs.size(); ++s)
       body << "<span style=\"color:rgb(" << int(kStrategyColours[s][0]) << "," << int(kStrategyColours[s][1]) << "," << int(kStrategyColours[s][2])
            << ")\">&#9632; " << runs[s].strategy << " (" << wins[s] << ")</span> ";
-    body << "</figcaption></figure></div>\n";
+    body << "<span style=\"color:#777\">&#9632; nothing to estimate, every strategy exact (" << ties << ")</span></figcaption></figure></div>\n";
     if (name == "torch-in-mist") headlineSvg = svg, headlineMd << table.str();
   }
 

@@ -81,6 +81,27 @@ ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float
   return e;
 }
 
+std::vector<float> errorFalseColour(const std::vector<float>& image, const std::vector<float>& reference, bool relative) {
+  static const float ramp[6][3] = {{0, 0, 0}, {0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.3f}, {0.95f, 0.9f, 0.1f}, {0.95f, 0.15f, 0.1f}, {1, 1, 1}};
+  double mean = 0.0;
+  for (float v : reference) mean += v;
+  mean = std::max(1e-12, mean / std::max<size_t>(1, reference.size()));
+  const double eps = 0.01 * mean * mean;  // (0.1 mean)^2, as in relMSE
+  std::vector<float> out(image.size(), 0.0f);
+  for (size_t p = 0; p + 2 < image.size() && p + 2 < reference.size(); p += 3) {
+    double e = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double d = std::abs(double(image[p + c]) - reference[p + c]);
+      e += relative ? d / std::sqrt(double(reference[p + c]) * reference[p + c] + eps) : d / mean;
+    }
+    const float t = std::clamp(static_cast<float>((std::log10(std::max(1e-6, e / 3.0)) + 2.0) / 3.0), 0.0f, 1.0f) * 5.0f;
+    const int k = std::min(4, static_cast<int>(t));
+    const float f = t - k;
+    for (int c = 0; c < 3; ++c) out[p + c] = ramp[k][c] * (1 - f) + ramp[k + 1][c] * f;
+  }
+  return out;
+}
+
 std::string sceneContentHash(const SceneDesc& scene, const std::string& extra) {
   Json doc = sceneToJson(scene);
   doc.erase("strategy");

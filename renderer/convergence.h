@@ -19,6 +19,10 @@ struct ErrorMetrics {
 // relmse = mean over pixels and channels of (I - R)^2 / (R^2 + eps), eps = (0.01 * mean(R))^2 ... see kRelMseFormula
 extern const char* const kRelMseFormula;
 ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference);
+// An error map for display: per pixel, averaged over channels, |I - R| / mean(R) (absolute) or
+// |I - R| / sqrt(R^2 + eps) with the relMSE's eps (relative), in false colour on a log scale from
+// 0.01 (black) through blue, green, yellow, red to 10 (white). Interleaved RGB in [0, 1].
+std::vector<float> errorFalseColour(const std::vector<float>& image, const std::vector<float>& reference, bool relative);
 
 // A stable hash of everything that decides the expected image (camera, scene content, render
 // settings but spp/time), plus `extra` (reference strategy and spp).

@@ -353,41 +353,16 @@ void Viewer::pollComparison() {
   uploadPanes();
 }
 
-// False colour for the error views: black, blue, green, yellow, red, white over t in [0, 1].
-static void falseColour(float t, float* rgb) {
-  static const float ramp[6][3] = {{0, 0, 0}, {0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.3f}, {0.95f, 0.9f, 0.1f}, {0.95f, 0.15f, 0.1f}, {1, 1, 1}};
-  t = std::clamp(t, 0.0f, 1.0f) * 5.0f;
-  const int k = std::min(4, static_cast<int>(t));
-  const float f = t - k;
-  for (int c = 0; c < 3; ++c) rgb[c] = ramp[k][c] * (1 - f) + ramp[k + 1][c] * f;
-}
-
 void Viewer::uploadPanes() {
   if (!compFrame_) return;
   const bool error = paneView_ != PaneView::Image && compFrame_->reference;
-  double meanReference = 0.0;
-  if (error) {
-    for (float v : *compFrame_->reference) meanReference += v;
-    meanReference = std::max(1e-12, meanReference / compFrame_->reference->size());
-  }
   for (size_t i = 0; i < compFrame_->panes.size() && i < paneGl_.size(); ++i) {
     const auto& film = compFrame_->panes[i].film;
     if (!film) continue;
     std::vector<float> image = film->meanImage();
-    if (error && image.size() == compFrame_->reference->size()) {
-      const std::vector<float>& ref = *compFrame_->reference;
-      // Per pixel, averaged over channels: |I - R| / mean(R) (absolute) or |I - R| / sqrt(R^2 + eps)
-      // with the relMSE's eps (relative); log scale from 1e-2 to 1e1, shown through the raw view.
-      const double eps = 0.01 * meanReference * meanReference;
-      for (size_t p = 0; p < image.size(); p += 3) {
-        double e = 0.0;
-        for (int c = 0; c < 3; ++c) {
-          const double d = std::abs(image[p + c] - ref[p + c]);
-          e += paneView_ == PaneView::AbsoluteError ? d / meanReference : d / std::sqrt(ref[p + c] * ref[p + c] + eps);
-        }
-        falseColour(static_cast<float>((std::log10(std::max(1e-6, e / 3.0)) + 2.0) / 3.0), &image[p]);
-      }
-    }
+    // Error views: false colour (shown through the raw view, see paneDisplay()).
+    if (error && image.size() == compFrame_->reference->size())
+      image = errorFalseColour(image, *compFrame_->reference, paneView_ == PaneView::RelativeError);
     paneGl_[i]->uploadImage(film->width(), film->height(), image);
     paneDirty_[i] = true;
   }
