@@ -209,10 +209,10 @@ int runReport(bool quick, const std::string& dir, int threads) {
   int disagreements = 0;
   for (const auto& c : loadStabilityCases(assets + "stability/cases.json")) {
     Film conventional;
-    const StabilityResult base = runStability(c, "conventional", 4 * spp, nullptr, &conventional, threads);
+    const StabilityResult base = runStability(c, "conventional", 4 * spp * c.sppScale, nullptr, &conventional, threads);
     std::vector<StabilityResult> results{base};
     for (const auto& preset : presets)
-      if (preset != "conventional") results.push_back(runStability(c, preset, spp, &conventional, nullptr, threads));
+      if (preset != "conventional") results.push_back(runStability(c, preset, spp * c.sppScale, &conventional, nullptr, threads));
     for (const auto& r : results) {
       disagreements += r.agrees ? 0 : 1;
       char row[512];

@@ -33,6 +33,8 @@ std::vector<StabilityCase> loadStabilityCases(const std::string& manifestPath) {
     c.weakness = j.value("weakness", "");
     if (j.contains("sets")) c.sets = j["sets"].get<std::vector<std::string>>();
     if (j.contains("strategy_sets")) c.strategySets = j["strategy_sets"].get<std::vector<std::string>>();
+    c.sppScale = j.value("spp_scale", 1);
+    if (c.sppScale < 1 || c.sppScale > 1024) throw InputError(manifestPath + ": " + field + ".spp_scale: expected an integer in [1, 1024]");
     cases.push_back(c);
   }
   return cases;
@@ -79,11 +81,16 @@ StabilityResult runStability(const StabilityCase& c, const std::string& preset, 
     r.maxAbsZ = a.maxAbsZ;
     r.threshold = a.threshold;
     const auto ra = regionEstimates(film, kStabilityBlocks, kStabilityBlocks), rb = regionEstimates(*conventional, kStabilityBlocks, kStabilityBlocks);
+    // Over the region-channels that carry signal (at least a tenth of the brightest): a bias in a
+    // channel that is nearly black (the blue of a flame) is neither visible nor meaningful.
+    double brightest = 0.0;
+    for (size_t i = 0; i < ra.size(); ++i)
+      for (int ch = 0; ch < 3; ++ch) brightest = std::max(brightest, 0.5 * (ra[i].mean[ch] + rb[i].mean[ch]));
     std::vector<double> detectable;
     for (size_t i = 0; i < ra.size(); ++i)
       for (int ch = 0; ch < 3; ++ch) {
         const double m = 0.5 * (ra[i].mean[ch] + rb[i].mean[ch]);
-        if (m <= 0.0) continue;
+        if (m <= 0.1 * brightest || m <= 0.0) continue;
         const double s = std::sqrt(double(ra[i].standardError[ch]) * ra[i].standardError[ch] + double(rb[i].standardError[ch]) * rb[i].standardError[ch]);
         detectable.push_back(a.threshold * s / m);
       }

@@ -22,6 +22,7 @@ struct StabilityCase {
   std::string weakness;                   // what makes it hard, and for which method
   std::vector<std::string> sets;          // --set edits for every strategy
   std::vector<std::string> strategySets;  // edits under "strategy." for every preset but conventional
+  int sppScale = 1;                       // heavy-tailed cases get more samples, so the test keeps its power
 };
 
 std::vector<StabilityCase> loadStabilityCases(const std::string& manifestPath);
@@ -34,7 +35,7 @@ struct StabilityResult {
   double seconds = 0.0;
   bool agrees = true;          // with conventional (always true for conventional itself)
   double maxAbsZ = 0.0, threshold = 0.0;
-  double detectableBias = 0.0; // median over regions and channels of threshold x combined standard error / mean
+  double detectableBias = 0.0; // median over region-channels with signal (>= 1/10 of the brightest) of threshold x combined standard error / mean
   uint64_t rejected = 0;       // NaN, Inf or negative samples kept off the film
   double relativeVariance = 0.0;  // mean over pixels of per-sample variance / mean^2 (where mean > 0)
   float maxSample = 0.0f;      // largest single sample: the firefly measure

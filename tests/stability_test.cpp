@@ -1,13 +1,16 @@
 // The stability suite (assets/scenes/stability/cases.json): where a method is known to be weak, every
 // preset must still agree with conventional, and no NaN or Inf may reach the film.
 //
-// Power: each case prints the bias it can detect: the median over 2x2 regions and channels of the
-// Bonferroni threshold times the combined standard error, relative to the mean (conventional at 4096
-// spp, the others at 1024, 48x27 pixels). Measured: 0.1-0.9% for the thin fire, thick cloud, holes,
-// invalid voxels, tiny grid and huge sparse field; 3-5% for the point light inside the medium and the
-// probe-radius cases (god-rays); 8-19% for g = +-0.95 and the emission-weight cases (torch-in-mist),
-// where conventional's fireflies dominate the variance. Those need far more conventional samples to
-// catch a 2% bias; the closing note of the report issue says so.
+// Power: each comparison computes the bias it can detect: the median, over the 2x2 regions and
+// channels that carry signal, of the Bonferroni threshold (alpha 1e-3) times the combined standard
+// error, relative to the mean. Conventional renders 4x the samples of the others (4096 against 1024
+// spp at 48x27 or 48x48 pixels; heavy-tailed cases scale both by their spp_scale). Measured: at most
+// 1.7% for every case and preset (0.06% thin fire ... 1.7% probe radius) and the test asserts < 2%,
+// with one exception it asserts and explains: a point light inside the medium with the emission
+// preset (no equi-angular sampling). Its next-event estimate has infinite variance (1/d^2 at the
+// light with transmittance-proportional distances), so its standard error does not shrink as
+// 1/sqrt(N): 4.8% at 1024 spp, 4.5% at 6144. That is the failure this case exists to show;
+// equi-angular (full 1.6%, equiangular 1.9%) removes it.
 #include "stability.h"
 #include "test_support.h"
 
@@ -27,14 +30,17 @@ TEST_P(Stability, EveryPresetAgreesWithConventionalAndTheFilmStaysFinite) {
   // Conventional is cheap per sample and the noisier side in most cases: it gets 4x the samples.
   constexpr int kSpp = 1024;
   Film conventional;
-  const StabilityResult base = runStability(c, "conventional", 4 * kSpp, nullptr, &conventional);
+  const int spp = kSpp * c.sppScale;
+  const StabilityResult base = runStability(c, "conventional", 4 * spp, nullptr, &conventional);
   EXPECT_EQ(base.rejected, 0u) << c.name << ": conventional";
   for (const char* preset : {"emission", "full", "equiangular"}) {
-    const StabilityResult r = runStability(c, preset, kSpp, &conventional);
+    const StabilityResult r = runStability(c, preset, spp, &conventional);
     std::printf("%-20s %-12s agree %-3s |z| %5.2f (threshold %4.2f)  detectable bias %5.2f%%  rejected %llu  rel. variance %8.3g  max sample %8.3g  %.1f s\n",
                 c.name.c_str(), preset, r.agrees ? "yes" : "NO", r.maxAbsZ, r.threshold, 100.0 * r.detectableBias,
                 static_cast<unsigned long long>(r.rejected), r.relativeVariance, r.maxSample, r.seconds);
     EXPECT_TRUE(r.agrees) << c.name << " " << preset << ": |z| " << r.maxAbsZ << " > " << r.threshold;
+    const bool infiniteVariance = c.name == "point-light-inside" && std::string(preset) == "emission";
+    EXPECT_LT(r.detectableBias, infiniteVariance ? 0.06 : 0.02) << c.name << " " << preset << ": the test lacks the power to catch a 2% bias";
     EXPECT_EQ(r.rejected, 0u) << c.name << " " << preset;
   }
   if (c.name == "invalid-voxels") {
