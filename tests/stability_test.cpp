@@ -17,11 +17,19 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <ostream>
 
 namespace candela {
 namespace {
 
 class Stability : public testing::TestWithParam<StabilityCase> {};
+
+}  // namespace
+
+// gtest prints a parameter in test listings: the case's name, not its bytes.
+void PrintTo(const StabilityCase& c, std::ostream* os) { *os << c.name; }
+
+namespace {
 
 std::vector<StabilityCase> cases() { return loadStabilityCases(test::assetPath("assets/scenes/stability/cases.json")); }
 
