@@ -89,11 +89,6 @@ std::optional<SceneDesc> RenderSession::takeShownDesc() {
   return std::exchange(shownDescUpdate_, std::nullopt);
 }
 
-bool RenderSession::hasScene() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return shownDesc_ != nullptr;
-}
-
 void RenderSession::message(const std::string& text) {
   std::lock_guard<std::mutex> lock(mutex_);
   messages_.push_back(text);

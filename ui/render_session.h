@@ -68,7 +68,6 @@ class RenderSession {
   // the UI's fields return to what is rendering. Each is returned once.
   std::optional<SceneDesc> takeShownDesc();
   bool loading() const { return loading_.load(); }
-  bool hasScene() const;
 
  private:
   void workerLoop();

@@ -320,10 +320,11 @@ Viewer::Rect Viewer::imageRect() const {
 
 void Viewer::pollSession() {
   for (const auto& m : session_.takeMessages()) report(m);
+  // After an open, the scene as loaded (also what Reset camera returns to); after a failed build,
+  // the last good scene, so the fields show what is rendering.
   if (auto shown = session_.takeShownDesc()) {
-    const bool opened = !haveScene_ || shown->path != edited_.path || pendingOpen_;
     edited_ = *shown;
-    if (opened && pendingOpen_) fileScene_ = *shown, pendingOpen_ = 0;
+    if (pendingOpen_) fileScene_ = *shown, pendingOpen_ = 0;
     haveScene_ = true;
   }
   auto latest = session_.latest();
