@@ -52,10 +52,11 @@ TEST(RenderSession, StopsExactlyAtTheSppLimitAndMatchesABatchRender) {
 }
 
 TEST(RenderSession, EditRestartsWithAPreviewThenRefines) {
-  RenderSession session;
   // Every published frame, in order (the notification runs on the worker right after publishing).
+  // Declared before the session: its worker may still notify until the session is destroyed.
   std::mutex mutex;
   std::vector<std::shared_ptr<const Frame>> frames;
+  RenderSession session;
   session.setNotify([&] {
     std::lock_guard<std::mutex> lock(mutex);
     auto f = session.latest();
