@@ -158,16 +158,12 @@ void ComparisonSession::workerLoop() {
     if (panes.size() > 1 && std::chrono::duration<double>(Clock::now() - lastAgreement).count() > 1.0) {
       std::vector<const Film*> films;
       for (const auto& p : panes) films.push_back(&p.film);
-      const auto results = paneAgreement(films);
+      std::vector<std::string> labels;
+      for (const auto& p : state->panes) labels.push_back(p.label);
+      const auto results = paneAgreement(films, labels);
       for (size_t i = 0; i < panes.size(); ++i) {
         state->panes[i].agreement = results[i];
         state->panes[i].agreementTested = results[i].tests > 0;
-        if (!results[i].worst.empty()) {
-          // Name the partner by its label rather than its index.
-          const size_t at = results[i].worst.find(':');
-          const size_t j = std::stoul(results[i].worst.substr(5, at - 5));
-          state->panes[i].agreement.worst = "vs " + state->panes[j].label + results[i].worst.substr(at);
-        }
       }
       lastAgreement = Clock::now();
     }
@@ -175,7 +171,7 @@ void ComparisonSession::workerLoop() {
   }
 }
 
-std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films) {
+std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films, const std::vector<std::string>& labels) {
   std::vector<Agreement> out(films.size());
   for (size_t i = 0; i < films.size(); ++i) {
     if (films[i]->spp() < kAgreementMinSpp) continue;
@@ -191,7 +187,7 @@ std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films) {
       if (a.maxAbsZ >= all.maxAbsZ) {
         all.maxAbsZ = a.maxAbsZ;
         all.maxRelativeDifference = a.maxRelativeDifference;
-        all.worst = "pane " + std::to_string(j) + ": " + a.worst;
+        all.worst = (j < labels.size() ? "vs " + labels[j] : "pane " + std::to_string(j)) + ": " + a.worst;
       }
     }
     all.agree = partners == 0 || disagreements < partners;

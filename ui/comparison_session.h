@@ -104,8 +104,9 @@ class ComparisonSession {
 // Each film's region means tested against every other film's (z-test with each side's own
 // standard error: Welch's test at these sample sizes), from kAgreementMinSpp on. A film is flagged
 // (agree = false) when it disagrees with every film it was tested against: a biased strategy is the
-// odd one out and the others still agree. `worst` reads "pane J: region ...".
-std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films);
+// odd one out and the others still agree. `worst` reads "vs LABEL: region ..." (or "pane J: ..."
+// without labels).
+std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films, const std::vector<std::string>& labels = {});
 
 // The error series of every pane as CSV: pane,seconds,spp,mse,relmse,efficiency.
 std::string comparisonCsv(const ComparisonFrame& frame);

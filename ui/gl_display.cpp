@@ -15,6 +15,16 @@ void main() {
 }
 )";
 
+// The compile or link log of a shader or program.
+std::string infoLog(GLuint object, bool program) {
+  char buffer[4096] = {};
+  if (program)
+    glGetProgramInfoLog(object, sizeof(buffer), nullptr, buffer);
+  else
+    glGetShaderInfoLog(object, sizeof(buffer), nullptr, buffer);
+  return buffer;
+}
+
 GLuint compile(GLenum type, const std::string& source, std::string& log) {
   GLuint shader = glCreateShader(type);
   const char* text = source.c_str();
@@ -23,9 +33,7 @@ GLuint compile(GLenum type, const std::string& source, std::string& log) {
   GLint ok = 0;
   glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
   if (!ok) {
-    char buffer[4096];
-    glGetShaderInfoLog(shader, sizeof(buffer), nullptr, buffer);
-    log = buffer;
+    log = infoLog(shader, false);
     glDeleteShader(shader);
     return 0;
   }
@@ -112,10 +120,9 @@ void main() {
   GLint ok = 0;
   glGetProgramiv(program, GL_LINK_STATUS, &ok);
   if (!ok) {
-    char buffer[4096];
-    glGetProgramInfoLog(program, sizeof(buffer), nullptr, buffer);
+    const std::string log = infoLog(program, true);
     glDeleteProgram(program);
-    return std::string("display shader failed to link: ") + buffer;
+    return "display shader failed to link: " + log;
   }
   freeProgram();
   program_ = program;

@@ -219,6 +219,17 @@ class Viewer {
     bool contains(float px, float py) const { return px >= x && py >= y && px < x + w && py < y + h; }
   };
   Rect imageRect() const;
+  // A window rectangle (top-left origin, window units) in framebuffer pixels (bottom-left origin).
+  struct PixelRect {
+    int x = 0, y = 0, w = 0, h = 0;
+  };
+  PixelRect framebufferRect(const Rect& r) const {
+    int fbw, fbh, ww, wh;
+    glfwGetFramebufferSize(window_, &fbw, &fbh);
+    glfwGetWindowSize(window_, &ww, &wh);
+    const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
+    return {static_cast<int>(r.x * sx), fbh - static_cast<int>((r.y + r.h) * sy), static_cast<int>(r.w * sx), static_cast<int>(r.h * sy)};
+  }
   // Image zoom and pan (2D, on the displayed image; every pane shares it, so they stay in sync).
   ViewWindow view_;
   float zoom_ = 1.0f;
@@ -533,13 +544,7 @@ void Viewer::captureFigure() {
   const std::string path = *figureRequest_;
   figureRequest_.reset();
   try {
-    int fbw, fbh, ww, wh;
-    glfwGetFramebufferSize(window_, &fbw, &fbh);
-    glfwGetWindowSize(window_, &ww, &wh);
-    const Rect r = imageRect();
-    const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
-    const int x = static_cast<int>(r.x * sx), w = static_cast<int>(r.w * sx), h = static_cast<int>(r.h * sy);
-    const int y = fbh - static_cast<int>((r.y + r.h) * sy);
+    const auto [x, y, w, h] = framebufferRect(imageRect());
     DisplayImage image;
     image.width = w;
     image.height = h;
@@ -1166,30 +1171,26 @@ int Viewer::run() {
     glClearColor(0.11f, 0.11f, 0.12f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT);
     if (frame_) {
-      const Rect r = imageRect();
-      const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
-      const int x = static_cast<int>(r.x * sx), w = static_cast<int>(r.w * sx), h = static_cast<int>(r.h * sy);
-      const int y = fbh - static_cast<int>((r.y + r.h) * sy);
-      gl_->blitToWindow(x, y, w, h, !frame_->preview && w >= 2 * frame_->width * (view_.u1 - view_.u0), view_);
+      const PixelRect p = framebufferRect(imageRect());
+      gl_->blitToWindow(p.x, p.y, p.w, p.h, !frame_->preview && p.w >= 2 * frame_->width * (view_.u1 - view_.u0), view_);
     }
     if (compFrame_ && !compFrame_->panes.empty()) {
       const Rect r = imageRect();
-      const float sx = static_cast<float>(fbw) / std::max(1, ww), sy = static_cast<float>(fbh) / std::max(1, wh);
       const size_t n = compFrame_->panes.size();
       const bool wipe = wipe_ && n == 2;
       for (size_t i = 0; i < n && i < paneGl_.size(); ++i) {
         const auto& film = compFrame_->panes[i].film;
         if (!film) continue;
         if (paneDirty_[i]) paneGl_[i]->renderOutput(film->width(), film->height()), paneDirty_[i] = false;
-        const int y = fbh - static_cast<int>((r.y + r.h) * sy), h = static_cast<int>(r.h * sy);
         if (wipe) {
           // Pane 1 left of the divider, pane 2 right of it, in the same frame.
+          const PixelRect p = framebufferRect(r);
           const float a = i == 0 ? 0.0f : wipePosition_, b = i == 0 ? wipePosition_ : 1.0f;
-          paneGl_[i]->blitToWindow(static_cast<int>(r.x * sx), y, static_cast<int>(r.w * sx), h, false, view_, a, b);
+          paneGl_[i]->blitToWindow(p.x, p.y, p.w, p.h, false, view_, a, b);
           continue;
         }
-        const float px = r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
-        paneGl_[i]->blitToWindow(static_cast<int>(px * sx), y, static_cast<int>(r.w / n * sx), h, false, view_);
+        const PixelRect p = framebufferRect(Rect{r.x + r.w * static_cast<float>(i) / static_cast<float>(n), r.y, r.w / n, r.h});
+        paneGl_[i]->blitToWindow(p.x, p.y, p.w, p.h, false, view_);
       }
     }
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
