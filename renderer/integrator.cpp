@@ -183,20 +183,21 @@ Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
   return trace(state, rng);
 }
 
-bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability) const {
+bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability,
+                               float directWeight) const {
   const Scene& s = scene_;
   if (st.vertices >= s.render().max_depth) return false;
   ++st.vertices;
   const bool last = st.vertices == s.render().max_depth;
   const Vec3 wo = -st.ray.direction;
-  L += st.beta * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng);
+  L += st.beta * directWeight * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng);
   if (last) {
     // After the last vertex only volume emission that no light sampler covers is still missing.
     if (!s.hasEmissiveMedia() || !s.volumeLights().empty()) return false;
     st.lightsTaken = true;
   }
   if (continueProbability < 1.0f) {
-    if (rng.uniform() >= continueProbability) return false;
+    if (!(continueProbability > 0.0f) || rng.uniform() >= continueProbability) return false;
     st.beta /= continueProbability;
   }
   if (st.vertices >= s.strategy().russian_roulette_depth) {
@@ -245,7 +246,8 @@ Rgb PathTracer::guidedSample(const PathState& st, Rng& rng) const {
   const float sigmaN = std::max(0.0f, muBar - sigmaT);
   const float scatterDensity = gather ? muBar * sigmaS / (sigmaS + sigmaN) : sigmaS;
   // The vertex's NEE always uses its MIS-weighted throughput k = w_g T_hat mu_s / p_g (that is where
-  // guiding pays off in thin media); only the continuation is rouletted, with probability min(1, k).
+  // guiding pays off in thin media). In guided_vertex = path only the continuation is rouletted, with
+  // probability min(1, k); in direct mode there is none (the tracked vertex carries the path).
   const float weight = guidedWeight(nullProbability * scatterDensity / pdf);
   const float k = weight * ratio * sigmaS / pdf;
   if (!(k > 0.0f)) return Rgb(0.0f);
@@ -253,7 +255,8 @@ Rgb PathTracer::guidedSample(const PathState& st, Rng& rng) const {
   PathState g = st;
   g.beta = st.beta * k * (m.albedo() / m.albedoAverage());
   Rgb L(0.0f);
-  if (scatterVertex(g, p, m.g(), L, rng, std::min(1.0f, k))) L += trace(g, rng);
+  const bool continuePath = s.strategy().guiding.guided_vertex == GuidedVertex::Path;
+  if (scatterVertex(g, p, m.g(), L, rng, continuePath ? std::min(1.0f, k) : 0.0f) && continuePath) L += trace(g, rng);
   return L;
 }
 
@@ -305,6 +308,8 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering
     float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather mode)
     float trackedWeight = 1.0f;    // MIS weight of the tracked scattering on a guided segment
+    float trackedDirect = 1.0f;    // ... applied to its NEE only (guided_vertex = direct)
+    float trackedContinue = 1.0f;  // ... or as its continuation's survival probability (path)
     trackCollisions(s.media(), ray, tEnd, rng, [&](const Collision& c) {
       float sigmaA = 0.0f, sigmaS = 0.0f;
       for (int i = 0; i < c.count; ++i) {
@@ -384,19 +389,25 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     if (guided) {
       // MIS weight of the tracked scattering, then the guided sample from the segment's start.
       if (event == Event::Scattered) {
-        // The tracked vertex's NEE carries its MIS weight w_t; its continuation survives with
-        // probability w_t (then unweighted). With the guided vertex doing likewise, a guided segment
-        // continues about one path on average instead of two.
+        // The tracked vertex's NEE carries its MIS weight w_t. In guided_vertex = path its
+        // continuation survives with probability w_t (then unweighted): with the guided vertex doing
+        // likewise, a guided segment continues about one path on average instead of two. In direct
+        // mode the continuation is the tracked technique's alone, unweighted.
         const float pg = guide.pdf(scatterT);
         trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
-        st.beta *= trackedWeight;
+        if (strategy.guiding.guided_vertex == GuidedVertex::Path) {
+          st.beta *= trackedWeight;
+          trackedContinue = trackedWeight;
+        } else {
+          trackedDirect = trackedWeight;
+        }
       }
       L += guidedSample(segmentStart, rng);
     }
     if (event == Event::Absorbed) break;
 
     if (event == Event::Scattered) {
-      if (isBlack(st.beta) || !scatterVertex(st, scatterPos, scatterG, L, rng, trackedWeight)) break;
+      if (isBlack(st.beta) || !scatterVertex(st, scatterPos, scatterG, L, rng, trackedContinue, trackedDirect)) break;
       continue;
     }
 

@@ -58,9 +58,11 @@ class PathTracer {
   // Follows a path from its current ray to the end; returns the radiance it gathers.
   Rgb trace(PathState state, Rng& rng) const;
   // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
-  // false when the path ends there. The continuation (not the NEE) survives with probability
-  // `continueProbability` first (used to spend about one continuation per guided segment).
-  bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f) const;
+  // false when the path ends there. The NEE is scaled by `directWeight` (an MIS weight on guided
+  // segments); the continuation (not the NEE) survives with probability `continueProbability`
+  // first (used to spend about one continuation per guided segment in guided_vertex = path).
+  bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f,
+                     float directWeight = 1.0f) const;
   // The guided distance sample of one ray segment and the path continuing from it (METHOD.md s.4).
   // It samples the density built for this segment (tlsGuide in integrator.cpp).
   Rgb guidedSample(const PathState& state, Rng& rng) const;

@@ -83,11 +83,24 @@ struct EnumNames<GuideCombination> {
   }
 };
 
+// What the guided vertex estimates. direct: only its direct light (NEE), the tracked vertex alone
+// continuing the path (the talk's "camera rays and direct illumination"); path: its direct light
+// and a continuing path, both vertices weighted by MIS (METHOD.md s.4's simplest form).
+enum class GuidedVertex { Direct, Path };
+template <>
+struct EnumNames<GuidedVertex> {
+  static const std::vector<std::pair<GuidedVertex, const char*>>& get() {
+    static const std::vector<std::pair<GuidedVertex, const char*>> v{{GuidedVertex::Direct, "direct"}, {GuidedVertex::Path, "path"}};
+    return v;
+  }
+};
+
 // Scattering (distance) sampling, talk s.2.2 and METHOD.md s.4: a guided distance sample per ray,
 // combined with the tracked (transmittance-based) sample by MIS (Miller et al. 2019).
 struct GuidingSettings {
   DistanceGuide guide = DistanceGuide::None;
   GuideCombination combination = GuideCombination::Balance;  // MIS heuristic, or MIS off
+  GuidedVertex guided_vertex = GuidedVertex::Direct;
   int guided_segments = 1;        // 1: camera rays; 2: also the rays leaving the first vertex
   float floor = 0.1f;             // uniform share of the piecewise-linear density (full support)
   float probe_spacing = 0.0f;     // world units between probes; 0: 1/20 of the media's extent
@@ -101,6 +114,9 @@ struct GuidingSettings {
     v.field("guide", guide, "Guided distance sampler: none, probes (talk 2.2) or equiangular (Kulla and Fajardo 2012)");
     v.field("combination", combination,
             "How the guided and tracked samples combine: balance or power heuristic MIS, average (MIS off), guided_only");
+    v.field("guided_vertex", guided_vertex,
+            "direct: the guided vertex adds only its direct light and the tracked vertex continues the path; path: "
+            "both vertices add direct light and a continuing path, weighted by MIS");
     v.field("guided_segments", guided_segments, "Path segments that get a guided sample: 1 camera rays, 2 also the rays from the first vertex", Range{1, 64});
     v.field("floor", floor, "Uniform share of the guided density, so its support is complete", Range{1e-4, 1.0});
     v.field("probe_spacing", probe_spacing, "World units between probes (0: automatic, 1/20 of the media's extent)", Range{0.0, 1e6});
