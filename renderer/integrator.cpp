@@ -37,12 +37,12 @@ struct GuideDensity {
   float pdf(float t) const { return piecewiseLinear ? linear.pdf(t) : equiAngular.pdf(t); }
 };
 
-void PathTracer::buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const {
+void PathTracer::buildGuide(const Ray& ray, float tIn, float tOut, bool cameraRay, GuideDensity& out) const {
   const GuidingSettings& g = scene_.strategy().guiding;
   out.piecewiseLinear = g.guide != DistanceGuide::EquiAngular;
   if (out.piecewiseLinear) {
     out.knots.clear();
-    if (probes_) probes_->gatherKnots(ray, tIn, tOut, out.knots);
+    if (probes_) probes_->gatherKnots(ray, tIn, tOut, cameraRay, out.knots);
     out.linear.build(tIn, tOut, out.knots, g.floor);
   } else {
     out.equiAngular.build(ray, tIn, tOut, equiAngularTargets_);
@@ -297,7 +297,7 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     const bool guided = guiding && st.segment < strategy.guiding.guided_segments && !st.lightsTaken && st.vertices < maxDepth &&
                         mediumInterval(ray, tEnd, tIn, tOut) &&
                         (maxDepthTau <= 0.0f || majorantOpticalDepth(ray, tIn, tOut) <= maxDepthTau);
-    if (guided) buildGuide(ray, tIn, tOut, guide);
+    if (guided) buildGuide(ray, tIn, tOut, st.segment == 0, guide);
     PathState segmentStart;  // the guided sample starts from the segment's start, before the walk
     if (guided) segmentStart = st;
 

@@ -66,8 +66,9 @@ class PathTracer {
   // The guided distance sample of one ray segment and the path continuing from it (METHOD.md s.4).
   // It samples the density built for this segment (tlsGuide in integrator.cpp).
   Rgb guidedSample(const PathState& state, Rng& rng) const;
-  // The guided distance density for a ray over [tIn, tOut].
-  void buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const;
+  // The guided distance density for a ray over [tIn, tOut] (camera rays use the probes' weights
+  // toward the camera, other rays their isotropic weights).
+  void buildGuide(const Ray& ray, float tIn, float tOut, bool cameraRay, GuideDensity& out) const;
   // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
   bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).

@@ -60,11 +60,11 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
   const PathTracer tracer(scene);
   const Vec3 camera = scene.desc().camera.position;
   const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.probe_budget_s));
-  std::vector<float> weights(centers.size(), -1.0f);
+  std::vector<float> weights(centers.size(), -1.0f), isotropic(centers.size(), 0.0f);
   tbb::parallel_for(size_t{0}, centers.size(), [&](size_t i) {
     if ((cancel && cancel->load()) || Clock::now() > deadline) return;
     Rng rng(hashCombine(scene.desc().render.seed, 0x9e0be5ULL), i);
-    double sum = 0.0;
+    double sum = 0.0, sumIsotropic = 0.0;
     for (int s = 0; s < settings.probe_samples; ++s) {
       // y uniform in the ball of radius r around the probe.
       Vec3 y;
@@ -79,11 +79,14 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
       const float dist = glm::length(toCamera);
       if (!(dist > 0.0f)) continue;
       sum += c.sigmaS * luminance(tracer.inScattered(y, toCamera / dist, g, rng));
+      sumIsotropic += c.sigmaS * luminance(tracer.inScattered(y, toCamera / dist, 0.0f, rng));
     }
     weights[i] = static_cast<float>(sum / settings.probe_samples);
+    isotropic[i] = static_cast<float>(sumIsotropic / settings.probe_samples);
   });
   for (size_t i = 0; i < centers.size(); ++i)
-    if (weights[i] >= 0.0f && std::isfinite(weights[i])) set->probes_.push_back({centers[i], weights[i]});
+    if (weights[i] >= 0.0f && std::isfinite(weights[i]) && std::isfinite(isotropic[i]))
+      set->probes_.push_back({centers[i], weights[i], isotropic[i]});
   set->buildLookup(lo);
   set->seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
   return set;
@@ -119,7 +122,7 @@ void ProbeSet::buildLookup(const Vec3& latticeOrigin) {
   }
 }
 
-void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, std::vector<DistanceKnot>& knots) const {
+void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, bool cameraRay, std::vector<DistanceKnot>& knots) const {
   if (probes_.empty()) return;
   // A probe overlaps several cells; per-thread stamps keep one knot per probe in O(1).
   thread_local std::vector<uint32_t> stamps;
@@ -142,7 +145,7 @@ void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, std::vector<Dista
       const float t = glm::dot(p.center - ray.origin, ray.direction);
       const Vec3 off = ray.at(t) - p.center;
       if (glm::dot(off, off) > r2 || t < t0 - radius_ || t > t1 + radius_) continue;
-      knots.push_back({t, p.weight});
+      knots.push_back({t, cameraRay ? p.weight : p.isotropicWeight});
     }
   }
 }

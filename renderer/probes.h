@@ -3,7 +3,8 @@
 // scatter), each with a radius of influence. Each learns a scattering sample weight
 //     s = E[ mu_s(y) * rho(w_cam, w_light) * L_light * T(y, light) / p_light ],
 // y uniform in the sphere, the light (emissive volumes included) chosen by the scene's light
-// sampler, w_cam toward the camera origin, T by ratio tracking. A ray gathers the probes whose
+// sampler, w_cam toward the camera origin, T by ratio tracking; and the same with an isotropic phase
+// for rays that do not start at the camera (the guided direct light of later segments). A ray gathers the probes whose
 // sphere it crosses as knots (projection on the ray, s) of a piecewise-linear distance density.
 #pragma once
 
@@ -21,7 +22,8 @@ class Scene;
 
 struct Probe {
   Vec3 center{0.0f};
-  float weight = 0.0f;  // scattering sample weight s (luminance)
+  float weight = 0.0f;            // scattering sample weight s (luminance), phase toward the camera origin
+  float isotropicWeight = 0.0f;   // the same with an isotropic phase, for rays that do not start at the camera
 };
 
 class ProbeSet {
@@ -38,8 +40,10 @@ class ProbeSet {
   double learnSeconds() const { return seconds_; }
   bool complete() const { return static_cast<int>(probes_.size()) == placed_; }
 
-  // Appends a knot for each probe whose sphere the ray crosses within [t0, t1].
-  void gatherKnots(const Ray& ray, float t0, float t1, std::vector<DistanceKnot>& knots) const;
+  // Appends a knot for each probe whose sphere the ray crosses within [t0, t1]. Camera rays take
+  // the weight learned with the phase toward the camera origin; any other ray (leaving a surface or a
+  // scattering vertex, whose direction the probes could not know) takes the isotropic weight.
+  void gatherKnots(const Ray& ray, float t0, float t1, bool cameraRay, std::vector<DistanceKnot>& knots) const;
 
  private:
   void buildLookup(const Vec3& latticeOrigin);

@@ -109,6 +109,23 @@ TEST(Probes, PlacedOverTheMediumAndLearnedWithinBudget) {
   EXPECT_LT(scene->probes()->learnSeconds(), 1.0);
 }
 
+// Both weights estimate E[mu_s L T / p] times a phase: with g = 0 the phase toward the camera is
+// isotropic too, so over all probes the two sums agree (independent light samples: within noise);
+// with g = 0.85 seen side-on they must not (the phase toward the camera is 0.2x isotropic there).
+TEST(Probes, IsotropicWeightMatchesTheCameraWeightWhenThePhaseIsIsotropic) {
+  auto sums = [](const std::string& g) {
+    auto scene = Scene::build(test::loadScene("assets/scenes/god-rays.json", {"strategy.preset=\"full\"", "volumes.0.g=" + g}));
+    double camera = 0.0, isotropic = 0.0;
+    for (const auto& p : scene->probes()->probes()) camera += p.weight, isotropic += p.isotropicWeight;
+    return std::make_pair(camera, isotropic);
+  };
+  const auto [camera0, isotropic0] = sums("0");
+  ASSERT_GT(camera0, 0.0);
+  EXPECT_NEAR(isotropic0 / camera0, 1.0, 0.03);
+  const auto [camera85, isotropic85] = sums("0.85");
+  EXPECT_LT(camera85 / isotropic85, 0.6);
+}
+
 TEST(Probes, BackgroundRelearnKeepsTheOldSetServingUntilTheNewOneIsReady) {
   auto scene = Scene::build(test::loadScene("assets/scenes/god-rays.json", {"strategy.preset=\"full\"", "camera.resolution=[16,9]"}));
   const auto before = scene->probes();
