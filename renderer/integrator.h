@@ -12,7 +12,8 @@
 //   (probes or equi-angular) whose null collisions on [0, t] come from ratio tracking; it is
 //   combined with the tracked scattering by MIS with p_guided = p_g(t) and
 //   p_tracked = prod(P_null) * mu_bar(t) P_s(t) (METHOD.md s.4; Miller et al. 2019). Emission
-//   along the ray is counted once, by the tracked walk.
+//   along the ray is counted once, by the tracked walk. By default (guiding.guided_vertex = direct)
+//   the guided vertex adds only its direct light and the tracked vertex carries the path.
 // Scattering does next-event estimation (ratio-tracked transmittance, or Algorithm 1 toward
 // emissive volumes), then samples HG; surfaces are diffuse.
 //
@@ -63,8 +64,9 @@ class PathTracer {
   // first (used to spend about one continuation per guided segment in guided_vertex = path).
   bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f,
                      float directWeight = 1.0f) const;
-  // The guided distance sample of one ray segment and the path continuing from it (METHOD.md s.4).
-  // It samples the density built for this segment (tlsGuide in integrator.cpp).
+  // The guided distance sample of one ray segment (METHOD.md s.4): its vertex's direct light, and with
+  // guided_vertex = path also the path continuing from it. It samples the density built for this
+  // segment (tlsGuide in integrator.cpp).
   Rgb guidedSample(const PathState& state, Rng& rng) const;
   // The guided distance density for a ray over [tIn, tOut] (camera rays use the probes' weights
   // toward the camera, other rays their isotropic weights).
