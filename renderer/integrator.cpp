@@ -307,9 +307,9 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     float nullProbability = 1.0f;  // prod of P_null over this walk's null collisions (for MIS)
     float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering
     float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather mode)
-    float trackedWeight = 1.0f;    // MIS weight of the tracked scattering on a guided segment
-    float trackedDirect = 1.0f;    // ... applied to its NEE only (guided_vertex = direct)
-    float trackedContinue = 1.0f;  // ... or as its continuation's survival probability (path)
+    // The tracked scattering's MIS weight on a guided segment, applied to its NEE only
+    // (guided_vertex = direct) or as its continuation's survival probability (path).
+    float trackedDirect = 1.0f, trackedContinue = 1.0f;
     trackCollisions(s.media(), ray, tEnd, rng, [&](const Collision& c) {
       float sigmaA = 0.0f, sigmaS = 0.0f;
       for (int i = 0; i < c.count; ++i) {
@@ -394,7 +394,7 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
         // likewise, a guided segment continues about one path on average instead of two. In direct
         // mode the continuation is the tracked technique's alone, unweighted.
         const float pg = guide.pdf(scatterT);
-        trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
+        const float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
         if (strategy.guiding.guided_vertex == GuidedVertex::Path) {
           st.beta *= trackedWeight;
           trackedContinue = trackedWeight;
