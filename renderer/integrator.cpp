@@ -37,12 +37,12 @@ struct GuideDensity {
   float pdf(float t) const { return piecewiseLinear ? linear.pdf(t) : equiAngular.pdf(t); }
 };
 
-void PathTracer::buildGuide(const Ray& ray, float tIn, float tOut, bool cameraRay, GuideDensity& out) const {
+void PathTracer::buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const {
   const GuidingSettings& g = scene_.strategy().guiding;
   out.piecewiseLinear = g.guide != DistanceGuide::EquiAngular;
   if (out.piecewiseLinear) {
     out.knots.clear();
-    if (probes_) probes_->gatherKnots(ray, tIn, tOut, cameraRay, out.knots);
+    if (probes_) probes_->gatherKnots(ray, tIn, tOut, out.knots);
     out.linear.build(tIn, tOut, out.knots, g.floor);
   } else {
     out.equiAngular.build(ray, tIn, tOut, equiAngularTargets_);
@@ -176,6 +176,24 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
   return f * ls.radiance * (tr * weight / lightPdf);
 }
 
+float PathTracer::unphasedIncident(const Vec3& p, int index, Rng& rng) const {
+  const size_t lightCount = scene_.lights().size();
+  if (static_cast<size_t>(index) >= lightCount) {
+    const EmissionLight& volume = *scene_.volumeLights()[static_cast<size_t>(index) - lightCount];
+    Vec3 wi;
+    if (!volume.sample(p, rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform(), wi)) return 0.0f;
+    const float pdf = volume.pdf(p, wi);
+    if (!(pdf > 0.0f)) return 0.0f;
+    const Ray ray{p, wi};
+    return luminance(emissionAlongRay(scene_.media(), ray, nearestOccluder(ray), rng)) / pdf;
+  }
+  const Light& light = scene_.lights()[static_cast<size_t>(index)];
+  LightSample ls;
+  if (!light.sample(p, Vec2(rng.uniform(), rng.uniform()), ls) || isBlack(ls.radiance) || !(ls.pdf > 0.0f)) return 0.0f;
+  const float tr = visibility(p, ls.wi, ls.distance, index, rng);
+  return tr > 0.0f ? luminance(ls.radiance) * tr / ls.pdf : 0.0f;
+}
+
 Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
   PathState state;
   state.ray = cameraRay;
@@ -297,7 +315,7 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
     const bool guided = guiding && st.segment < strategy.guiding.guided_segments && !st.lightsTaken && st.vertices < maxDepth &&
                         mediumInterval(ray, tEnd, tIn, tOut) &&
                         (maxDepthTau <= 0.0f || majorantOpticalDepth(ray, tIn, tOut) <= maxDepthTau);
-    if (guided) buildGuide(ray, tIn, tOut, st.segment == 0, guide);
+    if (guided) buildGuide(ray, tIn, tOut, guide);
     PathState segmentStart;  // the guided sample starts from the segment's start, before the walk
     if (guided) segmentStart = st;
 

@@ -37,9 +37,13 @@ class PathTracer {
   // rejects and counts such samples.
   Rgb radiance(const Ray& cameraRay, Rng& rng) const;
 
-  // Light scattered toward wo at a medium point with HG parameter g, by light sampling alone
-  // (used to learn probes): the phase-weighted direct light, emissive volumes included.
+  // Light scattered toward wo at a medium point with HG parameter g, by light sampling alone: the
+  // phase-weighted direct light, emissive volumes included (one light chosen by the light sampler).
   Rgb inScattered(const Vec3& p, const Vec3& wo, float g, Rng& rng) const;
+  // One sample of the luminance arriving at p from light `index` alone (the scene's lights, then
+  // its emissive volumes), integrated over the light's solid angle with transmittance (ratio
+  // tracking; Algorithm 1 toward emissive volumes) and no phase: E = int L T dw. Probes learn this.
+  float unphasedIncident(const Vec3& p, int index, Rng& rng) const;
 
   // Solid-angle pdf of the volume-light technique producing direction w from x: the mixture
   // sum_m pmf_m p_m(w) over emissive volumes (Algorithm 2 for each).
@@ -68,9 +72,8 @@ class PathTracer {
   // guided_vertex = path also the path continuing from it. It samples the density built for this
   // segment (tlsGuide in integrator.cpp).
   Rgb guidedSample(const PathState& state, Rng& rng) const;
-  // The guided distance density for a ray over [tIn, tOut] (camera rays use the probes' weights
-  // toward the camera, other rays their isotropic weights).
-  void buildGuide(const Ray& ray, float tIn, float tOut, bool cameraRay, GuideDensity& out) const;
+  // The guided distance density for a ray over [tIn, tOut].
+  void buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const;
   // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
   bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).

@@ -1,6 +1,7 @@
 #include "probes.h"
 
 #include "integrator.h"
+#include "phase.h"
 #include "scene.h"
 
 #include <tbb/parallel_for.h>
@@ -56,15 +57,35 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
       }
   set->placed_ = static_cast<int>(centers.size());
 
+  // Each light's direction for the phase applied at lookup (ProbeLight).
+  for (const Light& l : scene.lights()) {
+    ProbeLight pl;
+    switch (l.type()) {
+      case LightType::Directional: {
+        LightSample ls;
+        if (l.sample(scene.center(), Vec2(0.5f), ls)) pl = {ProbeLight::Kind::Direction, ls.wi};
+        break;
+      }
+      case LightType::Point:
+      case LightType::Spot:
+      case LightType::Sphere: pl = {ProbeLight::Kind::Position, l.desc().position}; break;
+      case LightType::Environment: break;
+    }
+    set->lights_.push_back(pl);
+  }
+  for (const EmissionLight* v : scene.volumeLights()) set->lights_.push_back({ProbeLight::Kind::Position, v->centroid()});
+  const size_t lightCount = set->lights_.size();
+
   // Learn in parallel; a probe not started before the deadline (or a cancel) is dropped.
   const PathTracer tracer(scene);
-  const Vec3 camera = scene.desc().camera.position;
   const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.probe_budget_s));
-  std::vector<float> weights(centers.size(), -1.0f), isotropic(centers.size(), 0.0f);
+  std::vector<float> weights(centers.size() * lightCount, 0.0f), gs(centers.size(), 0.0f);
+  std::vector<char> learned(centers.size(), 0);
   tbb::parallel_for(size_t{0}, centers.size(), [&](size_t i) {
     if ((cancel && cancel->load()) || Clock::now() > deadline) return;
     Rng rng(hashCombine(scene.desc().render.seed, 0x9e0be5ULL), i);
-    double sum = 0.0, sumIsotropic = 0.0;
+    std::vector<double> sums(lightCount, 0.0);
+    double sigmaSSum = 0.0, gSum = 0.0;
     for (int s = 0; s < settings.probe_samples; ++s) {
       // y uniform in the ball of radius r around the probe.
       Vec3 y;
@@ -74,19 +95,25 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
       y = centers[i] + y * set->radius_;
       const Scene::PointCoefficients c = scene.coefficientsAt(y);
       if (!(c.sigmaS > 0.0f)) continue;
-      const float g = c.pick(scene, rng.uniform()).g();
-      const Vec3 toCamera = camera - y;
-      const float dist = glm::length(toCamera);
-      if (!(dist > 0.0f)) continue;
-      sum += c.sigmaS * luminance(tracer.inScattered(y, toCamera / dist, g, rng));
-      sumIsotropic += c.sigmaS * luminance(tracer.inScattered(y, toCamera / dist, 0.0f, rng));
+      sigmaSSum += c.sigmaS;
+      gSum += c.sigmaS * c.pick(scene, rng.uniform()).g();
+      for (size_t l = 0; l < lightCount; ++l) sums[l] += c.sigmaS * tracer.unphasedIncident(y, static_cast<int>(l), rng);
     }
-    weights[i] = static_cast<float>(sum / settings.probe_samples);
-    isotropic[i] = static_cast<float>(sumIsotropic / settings.probe_samples);
+    bool finite = true;
+    for (size_t l = 0; l < lightCount; ++l) {
+      const float u = static_cast<float>(sums[l] / settings.probe_samples);
+      finite = finite && std::isfinite(u);
+      weights[i * lightCount + l] = std::max(0.0f, u);
+    }
+    gs[i] = sigmaSSum > 0.0 ? static_cast<float>(gSum / sigmaSSum) : 0.0f;
+    learned[i] = finite;
   });
-  for (size_t i = 0; i < centers.size(); ++i)
-    if (weights[i] >= 0.0f && std::isfinite(weights[i]) && std::isfinite(isotropic[i]))
-      set->probes_.push_back({centers[i], weights[i], isotropic[i]});
+  for (size_t i = 0; i < centers.size(); ++i) {
+    if (!learned[i]) continue;
+    set->probes_.push_back({centers[i], gs[i]});
+    set->weights_.insert(set->weights_.end(), weights.begin() + static_cast<std::ptrdiff_t>(i * lightCount),
+                         weights.begin() + static_cast<std::ptrdiff_t>((i + 1) * lightCount));
+  }
   set->buildLookup(lo);
   set->seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
   return set;
@@ -122,7 +149,28 @@ void ProbeSet::buildLookup(const Vec3& latticeOrigin) {
   }
 }
 
-void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, bool cameraRay, std::vector<DistanceKnot>& knots) const {
+float ProbeSet::weight(size_t probe, const Vec3& wo, const Vec3& x) const {
+  const float g = probes_[probe].g;
+  const float* u = &weights_[probe * lights_.size()];
+  float s = 0.0f;
+  for (size_t l = 0; l < lights_.size(); ++l) {
+    if (!(u[l] > 0.0f)) continue;
+    const ProbeLight& light = lights_[l];
+    switch (light.kind) {
+      case ProbeLight::Kind::Direction: s += u[l] * hgEval(wo, light.v, g); break;
+      case ProbeLight::Kind::Position: {
+        const Vec3 d = light.v - x;
+        const float len = glm::length(d);
+        s += u[l] * (len > 0.0f ? hgEval(wo, d / len, g) : kInv4Pi);
+        break;
+      }
+      case ProbeLight::Kind::Diffuse: s += u[l] * kInv4Pi; break;
+    }
+  }
+  return s;
+}
+
+void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, std::vector<DistanceKnot>& knots) const {
   if (probes_.empty()) return;
   // A probe overlaps several cells; per-thread stamps keep one knot per probe in O(1).
   thread_local std::vector<uint32_t> stamps;
@@ -145,7 +193,7 @@ void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, bool cameraRay, s
       const float t = glm::dot(p.center - ray.origin, ray.direction);
       const Vec3 off = ray.at(t) - p.center;
       if (glm::dot(off, off) > r2 || t < t0 - radius_ || t > t1 + radius_) continue;
-      knots.push_back({t, cameraRay ? p.weight : p.isotropicWeight});
+      knots.push_back({t, weight(index, -ray.direction, ray.at(t))});
     }
   }
 }

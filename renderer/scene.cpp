@@ -197,11 +197,9 @@ void Scene::waitForProbes() {
 }
 
 void Scene::setCamera(const CameraDesc& camera) {
-  cancelProbes_ = true;
-  waitForProbes();
+  // Probes hold no camera-dependent term (the phase is applied per ray: probes.h), so they stay.
   desc_.camera = camera;
   camera_ = Camera(camera);
-  if (desc_.strategy.guiding.guide == DistanceGuide::Probes) relearnProbesAsync();
 }
 
 Scene::~Scene() {

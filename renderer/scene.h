@@ -74,14 +74,14 @@ class Scene {
   // The probe set serving renders now (null without probe guiding). Safe to call while a
   // background relearn runs: the old set keeps serving until the new one is swapped in.
   std::shared_ptr<const ProbeSet> probes() const { return std::atomic_load(&probes_); }
-  // Learns probes now (blocking), for the current camera, lights and volumes.
+  // Learns probes now (blocking), for the current lights and volumes.
   void learnProbes();
   // Learns probes on a background thread and swaps them in when done; a relearn still running is
-  // cancelled first. For live edits of the camera, lights or volume parameters.
+  // cancelled first. For live edits of the lights or volume parameters.
   void relearnProbesAsync();
   // Waits for a background relearn to finish.
   void waitForProbes();
-  // Moves the camera (a live edit); relearns probes in the background when guiding uses them.
+  // Moves the camera (a live edit); the probes stay valid (they learn no camera-dependent term).
   void setCamera(const CameraDesc& camera);
   // Applies new render settings (path length, seed, limits): nothing depends on them but the tracer.
   void setRender(const RenderSettings& render) { desc_.render = render; }
