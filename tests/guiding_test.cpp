@@ -112,25 +112,29 @@ TEST(Probes, PlacedOverTheMediumAndLearnedWithinBudget) {
 
 // A probe's weight s(wo) = sum_l u_l rho(wo, w_l) must be the talk's E[mu_s rho(wo, w_light) L T / p]
 // over its sphere: checked against an independent estimate by the tracer's phase-weighted light
-// sampling (inScattered), for the direction toward the camera and for the opposite one. The sun is
-// directional, so its phase is exact; the sky is off here (probes take it as isotropic, which is
-// only a sampling approximation where slats hide most of it).
-TEST(Probes, WeightMatchesThePhaseWeightedInScatteringOverTheSphere) {
-  auto scene = Scene::build(
-      test::loadScene("assets/scenes/god-rays.json", {"strategy.preset=\"full\"", "strategy.guiding.probe_samples=4096", "lights.1.intensity=0"}));
+// sampling (inScattered), for the direction toward the camera and for the opposite one, on five
+// lit probes spread over the set (not the brightest: those are the ones whose noise came out high)
+// at least `minLightDistance` probe radii from light 0. A directional sun's phase is exact; a point
+// light's is taken from the probe's centre, close when the sphere is small seen from the light.
+// The sky is off (probes take it as isotropic, only a sampling approximation where it is hidden).
+void checkProbeWeights(const std::string& scenePath, std::vector<std::string> edits, float minLightDistance) {
+  edits.insert(edits.end(), {"strategy.preset=\"full\"", "strategy.guiding.probe_samples=4096", "lights.1.intensity=0"});
+  auto scene = Scene::build(test::loadScene(scenePath, edits));
   auto probes = scene->probes();
   ASSERT_TRUE(probes);
   const PathTracer tracer(*scene);
   Rng rng(7, 3);
-  // Five probes in the sun, spread over the set (not the brightest: those are the ones whose
-  // noise came out high).
+  const ProbeLight& light = probes->lights()[0];
   std::vector<size_t> order;
-  for (size_t i = 0; i < probes->probes().size(); ++i)
-    if (probes->lightWeight(i, 0) > 0.0f) order.push_back(i);
+  for (size_t i = 0; i < probes->probes().size(); ++i) {
+    const bool far = light.kind != ProbeLight::Kind::Position ||
+                     glm::length(light.v - probes->probes()[i].center) > minLightDistance * probes->radius();
+    if (probes->lightWeight(i, 0) > 0.0f && far) order.push_back(i);
+  }
   ASSERT_GE(order.size(), 50u);
-  for (size_t k = 0; k < 5; ++k) order[k] = order[(2 * k + 1) * order.size() / 10];
-  for (int k = 0; k < 5; ++k) {
-    const Probe& probe = probes->probes()[order[static_cast<size_t>(k)]];
+  for (size_t k = 0; k < 5; ++k) {
+    const size_t index = order[(2 * k + 1) * order.size() / 10];
+    const Probe& probe = probes->probes()[index];
     const Vec3 toCamera = glm::normalize(scene->desc().camera.position - probe.center);
     for (const Vec3& wo : {toCamera, -toCamera}) {
       double sum = 0.0;
@@ -145,16 +149,29 @@ TEST(Probes, WeightMatchesThePhaseWeightedInScatteringOverTheSphere) {
         if (c.sigmaS > 0.0f) sum += c.sigmaS * luminance(tracer.inScattered(y, wo, c.pick(*scene, rng.uniform()).g(), rng));
       }
       const double expected = sum / n;
-      const float s = probes->weight(order[static_cast<size_t>(k)], wo, probe.center);
-      EXPECT_NEAR(s / expected, 1.0, 0.1) << "probe " << k << " at " << probe.center.x << "," << probe.center.y << "," << probe.center.z;
+      const float s = probes->weight(index, wo, probe.center);
+      EXPECT_NEAR(s / expected, 1.0, 0.1) << scenePath << ": probe " << index << " at " << probe.center.x << "," << probe.center.y << ","
+                                          << probe.center.z;
     }
   }
+}
+
+TEST(Probes, WeightMatchesThePhaseWeightedInScatteringUnderASun) {
+  checkProbeWeights("assets/scenes/god-rays.json", {}, 0.0f);
   // The phase is applied per ray: with g = 0.85 a probe in the sun weighs a ray that looks into the
   // sun (light scattered forward toward its origin) far above one that looks away from it.
-  const size_t lit = order[2];
+  auto scene = Scene::build(test::loadScene("assets/scenes/god-rays.json", {"strategy.preset=\"full\""}));
+  auto probes = scene->probes();
+  size_t lit = 0;
+  while (lit < probes->probes().size() && !(probes->lightWeight(lit, 0) > 0.0f)) ++lit;
+  ASSERT_LT(lit, probes->probes().size());
   const Vec3 towardSun = probes->lights()[0].v;
   const Vec3 x = probes->probes()[lit].center;
   EXPECT_GT(probes->weight(lit, -towardSun, x), 20.0f * probes->weight(lit, towardSun, x));
+}
+
+TEST(Probes, WeightMatchesThePhaseWeightedInScatteringAroundAPointLight) {
+  checkProbeWeights("assets/scenes/test/point-in-mist.json", {"volumes.0.g=0.6"}, 8.0f);
 }
 
 TEST(Probes, CameraMovesKeepTheProbes) {
