@@ -9,7 +9,7 @@
 // and the phase is applied when a ray gathers the probe: s(wo) = sum_l u_l rho(wo, w_l(x)) with
 // w_l(x) the light's direction at the ray point x beside the probe. On a camera ray wo = -ray
 // direction points exactly to the camera origin at every x, so s is the talk's weight with the
-// phase evaluated where the ray is, not at the probe centre (which matters near the camera, where
+// phase evaluated where the ray is, not at the probe centre (the two differ near the camera, where
 // the direction to it swings across a sphere by more than a g = 0.85 lobe is wide). Rays leaving a
 // surface or a scattering vertex get the phase of their own direction the same way, and the
 // weights do not depend on the camera: moving it needs no relearning.
