@@ -44,7 +44,7 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
   for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
   if (auto probes = scene->probes())
     std::printf("probes: %zu learned of %d placed (spacing %.3g, radius %.3g) in %.2f s%s\n", probes->probes().size(), probes->placed(),
-                probes->spacing(), probes->radius(), probes->learnSeconds(), probes->complete() ? "" : " (time budget reached)");
+                probes->spacing(), probes->radius(), probes->learnSeconds(), probes->complete() ? "" : " (CUT BY THE TIME CAP)");
   return scene;
 }
 

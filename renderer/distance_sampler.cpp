@@ -122,4 +122,44 @@ float EquiAngularDistance::sample(float u, float& pdfOut) const {
   return t;
 }
 
+void GuidedDistance::buildPiecewiseLinear(float t0, float t1, float floor) {
+  kind_ = Kind::Linear;
+  linear_.build(t0, t1, knots, floor);
+}
+
+void GuidedDistance::buildEquiAngular(const Ray& ray, float t0, float t1, const std::vector<EquiAngularTarget>& targets) {
+  kind_ = Kind::EquiAngular;
+  equiAngular_.build(ray, t0, t1, targets);
+}
+
+void GuidedDistance::borrow(const PiecewiseLinearDistance& unit, float t0, float t1) {
+  kind_ = Kind::Borrowed;
+  unit_ = &unit;
+  t0_ = t0;
+  length_ = std::max(t1 - t0, 1e-7f);
+}
+
+float GuidedDistance::sample(float u, float& pdf) const {
+  switch (kind_) {
+    case Kind::Linear: return linear_.sample(u, pdf);
+    case Kind::EquiAngular: return equiAngular_.sample(u, pdf);
+    case Kind::Borrowed: {
+      const float x = unit_->sample(u, pdf);
+      pdf /= length_;
+      return t0_ + x * length_;
+    }
+  }
+  pdf = 0.0f;
+  return 0.0f;
+}
+
+float GuidedDistance::pdf(float t) const {
+  switch (kind_) {
+    case Kind::Linear: return linear_.pdf(t);
+    case Kind::EquiAngular: return equiAngular_.pdf(t);
+    case Kind::Borrowed: return unit_->pdf((t - t0_) / length_) / length_;
+  }
+  return 0.0f;
+}
+
 }  // namespace candela

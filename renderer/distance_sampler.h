@@ -56,4 +56,31 @@ class EquiAngularDistance {
   std::vector<Lobe> lobes_;
 };
 
+// The guided distance density of one ray segment, the distance-sampler piece of a strategy:
+// piecewise-linear from probe knots, or an equi-angular mixture, over the segment's medium
+// interval [t0, t1]. It can also borrow a piecewise-linear density built once over the unit
+// interval (a pixel's cached camera-ray table, renderer/camera_guides.h) and map it onto each ray's
+// own interval: t = t0 + x (t1 - t0), p(t) = p_unit(x) / (t1 - t0). Any such density is a valid
+// sampling choice for MIS as long as it depends on the ray alone, never on the walk.
+class GuidedDistance {
+ public:
+  std::vector<DistanceKnot> knots;  // scratch: the probes' knots of the segment being built
+
+  // From `knots` (sorted and clamped here).
+  void buildPiecewiseLinear(float t0, float t1, float floor);
+  void buildEquiAngular(const Ray& ray, float t0, float t1, const std::vector<EquiAngularTarget>& targets);
+  // Borrows `unit` (over [0, 1]; it must outlive this density's use) for [t0, t1].
+  void borrow(const PiecewiseLinearDistance& unit, float t0, float t1);
+
+  float sample(float u, float& pdf) const;
+  float pdf(float t) const;
+
+ private:
+  enum class Kind { Linear, EquiAngular, Borrowed } kind_ = Kind::Linear;
+  PiecewiseLinearDistance linear_;
+  EquiAngularDistance equiAngular_;
+  const PiecewiseLinearDistance* unit_ = nullptr;
+  float t0_ = 0.0f, length_ = 1.0f;
+};
+
 }  // namespace candela

@@ -28,25 +28,20 @@ Rgb PathTracer::inScattered(const Vec3& p, const Vec3& wo, float g, Rng& rng) co
   return directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), false, rng);
 }
 
-struct GuideDensity {
-  bool piecewiseLinear = true;
-  PiecewiseLinearDistance linear;
-  EquiAngularDistance equiAngular;
-  std::vector<DistanceKnot> knots;
-  float sample(float u, float& pdf) const { return piecewiseLinear ? linear.sample(u, pdf) : equiAngular.sample(u, pdf); }
-  float pdf(float t) const { return piecewiseLinear ? linear.pdf(t) : equiAngular.pdf(t); }
-};
-
-void PathTracer::buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const {
+bool PathTracer::guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out) const {
   const GuidingSettings& g = scene_.strategy().guiding;
-  out.piecewiseLinear = g.guide != DistanceGuide::EquiAngular;
-  if (out.piecewiseLinear) {
+  if (g.guide == DistanceGuide::None || !mediumInterval(ray, tEnd, tIn, tOut)) return false;
+  // Thick rays are left to tracking, which scatters there reliably: the choice depends on the ray
+  // alone (never on the walk), so MIS stays valid with the tracked technique alone on them.
+  if (g.max_optical_depth > 0.0f && majorantOpticalDepth(ray, tIn, tOut) > g.max_optical_depth) return false;
+  if (g.guide == DistanceGuide::EquiAngular) {
+    out.buildEquiAngular(ray, tIn, tOut, equiAngularTargets_);
+  } else {
     out.knots.clear();
     if (probes_) probes_->gatherKnots(ray, tIn, tOut, out.knots);
-    out.linear.build(tIn, tOut, out.knots, g.floor);
-  } else {
-    out.equiAngular.build(ray, tIn, tOut, equiAngularTargets_);
+    out.buildPiecewiseLinear(tIn, tOut, g.floor);
   }
+  return true;
 }
 
 bool PathTracer::mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const {
@@ -194,11 +189,13 @@ float PathTracer::unphasedIncident(const Vec3& p, int index, Rng& rng) const {
   return tr > 0.0f ? luminance(ls.radiance) * tr / ls.pdf : 0.0f;
 }
 
-Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const {
+Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const { return radiance(cameraRay, nullptr, rng); }
+
+Rgb PathTracer::radiance(const Ray& cameraRay, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const {
   PathState state;
   state.ray = cameraRay;
   state.prevPos = cameraRay.origin;
-  return trace(state, rng);
+  return trace(state, cameraGuide, rng);
 }
 
 bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability,
@@ -232,27 +229,154 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
   return true;
 }
 
+// What the tracked walk of one segment found.
+struct PathTracer::SegmentWalk {
+  enum class Event { None, Absorbed, Scattered } event = Event::None;
+  Vec3 scatterPos{0.0f};
+  float scatterG = 0.0f, scatterT = 0.0f;
+  float nullProbability = 1.0f;  // prod of P_null over the walk's null collisions (for MIS)
+  float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering (for MIS)
+  float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather)
+};
+
 namespace {
-// The guided density of the segment being traced on this thread. Built before the tracked walk;
-// the tracked weight and the guided sample read it before any recursion rebuilds it.
-thread_local GuideDensity tlsGuide;
+
+// A collision's coefficients summed over the media overlapping it (albedo averages).
+struct CollisionCoefficients {
+  float sigmaA = 0.0f, sigmaS = 0.0f, sigmaN = 0.0f;
+  explicit CollisionCoefficients(const Collision& c) {
+    for (int i = 0; i < c.count; ++i) {
+      const float a = c.medium(i).albedoAverage();
+      sigmaS += c.sigmaT[i] * a;
+      sigmaA += c.sigmaT[i] * (1.0f - a);
+    }
+    sigmaN = std::max(0.0f, c.muBar - c.sigmaTTotal);
+  }
+};
+
+// What an event-probability rule made of a collision: keep walking, stop (absorbed), or scatter
+// with `pick` in [0, mu_s) choosing the medium.
+enum class Decision { Continue, Absorb, Scatter };
+
+// Conventional analog events (METHOD.md s.2, the talk's Fig. 1 left): absorb / scatter / null with
+// P = mu_a/mu_bar, mu_s/mu_bar, mu_n/mu_bar; emission is added only at absorption, E[beta Le] with
+// the per-channel mu_a handled by the weight mu_a,rgb / mu_a,avg. A null collision's weight
+// mu_n / (P_n mu_bar) is exactly 1.
+Decision analogEvent(const Collision& c, const CollisionCoefficients& k, float u, bool emissive, float emissionWeight, Rgb& beta,
+                     Rgb& L, float& nullProbability, float& scatterDensity, float& pick) {
+  const float x = u * c.muBar;
+  if (x < k.sigmaA) {
+    if (emissive) L += beta * c.emissionSource() * (emissionWeight / k.sigmaA);
+    return Decision::Absorb;
+  }
+  pick = x - k.sigmaA;
+  if (!(pick < k.sigmaS)) {
+    nullProbability *= k.sigmaN / c.muBar;
+    return Decision::Continue;
+  }
+  scatterDensity = k.sigmaS;
+  return Decision::Scatter;
+}
+
+// Emission gathered at every collision (talk 2.1, METHOD.md s.2): P_a = 1, add mu_a Le / mu_bar;
+// absorption becomes the weight 1 - mu_a / mu_bar, and the walk scatters with
+// P_s = mu_s / (mu_s + mu_n), else continues. Off guided segments, the weight lost to absorption
+// along the walk is rouletted once it falls below 0.1 (unbiased, keeps walks short); guided
+// segments skip that roulette, whose survival probability would enter p_tracked.
+Decision gatherEvent(const Collision& c, const CollisionCoefficients& k, float u, bool emissive, float emissionWeight, bool guided,
+                     Rgb& beta, Rgb& L, float& walkWeight, float& nullProbability, float& scatterDensity, float& pick, Rng& rng) {
+  if (emissive) L += beta * c.emissionSource() * (emissionWeight / c.muBar);
+  const float keep = (k.sigmaS + k.sigmaN) / c.muBar;
+  if (!(keep > 0.0f)) return Decision::Absorb;
+  beta *= keep;
+  pick = u * (k.sigmaS + k.sigmaN);
+  if (pick < k.sigmaS) {
+    scatterDensity = c.muBar * k.sigmaS / (k.sigmaS + k.sigmaN);
+    return Decision::Scatter;
+  }
+  if (guided) {
+    nullProbability *= k.sigmaN / (k.sigmaS + k.sigmaN);
+    return Decision::Continue;
+  }
+  walkWeight *= keep;
+  if (walkWeight < 0.1f) {
+    const float survive = walkWeight * 10.0f;
+    if (rng.uniform() >= survive) return Decision::Absorb;
+    beta /= survive;
+    walkWeight = 1.0f;
+  }
+  return Decision::Continue;
+}
+
+// The scattering medium, chosen by its share of mu_s (pick in [0, mu_s)).
+int scatteringMedium(const Collision& c, float pick) {
+  for (int i = 0; i < c.count; ++i) {
+    const float si = c.sigmaT[i] * c.medium(i).albedoAverage();
+    if (pick < si) return i;
+    pick -= si;
+  }
+  return c.count - 1;
+}
+
 }  // namespace
 
-Rgb PathTracer::guidedSample(const PathState& st, Rng& rng) const {
+PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const {
+  const bool gather = scene_.strategy().emission.gather_every_collision;
+  const bool emissive = scene_.hasEmissiveMedia();
+  SegmentWalk walk;
+  trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
+    const CollisionCoefficients k(c);
+    const float u = rng.uniform();
+    float pick = 0.0f;
+    const Decision d = gather ? gatherEvent(c, k, u, emissive, emissionWeight, guided, st.beta, L, walk.walkWeight, walk.nullProbability,
+                                            walk.scatterDensity, pick, rng)
+                              : analogEvent(c, k, u, emissive, emissionWeight, st.beta, L, walk.nullProbability, walk.scatterDensity, pick);
+    if (d == Decision::Continue) return true;
+    if (d == Decision::Absorb) {
+      walk.event = SegmentWalk::Event::Absorbed;
+      return false;
+    }
+    // Scattering: weight the chosen medium's RGB albedo against the average used to pick it.
+    const Medium& m = c.medium(scatteringMedium(c, pick));
+    st.beta *= m.albedo() / m.albedoAverage();
+    walk.scatterG = m.g();
+    walk.scatterPos = c.p;
+    walk.scatterT = c.t;
+    walk.event = SegmentWalk::Event::Scattered;
+    return false;
+  });
+  return walk;
+}
+
+bool PathTracer::prepareGuide(const PathState& st, float tEnd, const PiecewiseLinearDistance* cameraGuide, GuidedDistance& guide) const {
+  const GuidingSettings& g = scene_.strategy().guiding;
+  if (g.guide == DistanceGuide::None || st.segment >= g.guided_segments || st.lightsTaken || st.vertices >= scene_.render().max_depth)
+    return false;
+  float tIn = 0.0f, tOut = 0.0f;
+  if (st.segment == 0 && cameraGuide) {
+    // The pixel's cached table (camera_guides.h), mapped onto this ray's own medium interval; the
+    // thickness test is the same one guideFor applies, so the cache changes cost, not choices.
+    if (!mediumInterval(st.ray, tEnd, tIn, tOut)) return false;
+    if (g.max_optical_depth > 0.0f && majorantOpticalDepth(st.ray, tIn, tOut) > g.max_optical_depth) return false;
+    guide.borrow(*cameraGuide, tIn, tOut);
+    return true;
+  }
+  return guideFor(st.ray, tEnd, tIn, tOut, guide);
+}
+
+Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, Rng& rng) const {
   const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
   float pdf = 0.0f;
-  const float t = tlsGuide.sample(rng.uniform(), pdf);
+  const float t = guide.sample(rng.uniform(), pdf);
   if (!(pdf > 0.0f)) return Rgb(0.0f);
   // Null collisions on [0, t) by ratio tracking, with exact products (no roulette): `ratio` is the
   // estimator's transmittance, `nullProbability` what the tracked technique would have paid.
   float ratio = 1.0f, nullProbability = 1.0f;
   trackCollisions(s.media(), st.ray, t, rng, [&](const Collision& c) {
-    float sigmaS = 0.0f;
-    for (int i = 0; i < c.count; ++i) sigmaS += c.sigmaT[i] * c.medium(i).albedoAverage();
-    const float sigmaN = std::max(0.0f, c.muBar - c.sigmaTTotal);
-    ratio *= sigmaN / c.muBar;
-    nullProbability *= gather ? (sigmaS + sigmaN > 0.0f ? sigmaN / (sigmaS + sigmaN) : 0.0f) : sigmaN / c.muBar;
+    const CollisionCoefficients k(c);
+    ratio *= k.sigmaN / c.muBar;
+    nullProbability *= gather ? (k.sigmaS + k.sigmaN > 0.0f ? k.sigmaN / (k.sigmaS + k.sigmaN) : 0.0f) : k.sigmaN / c.muBar;
     return ratio > 0.0f;
   });
   if (!(ratio > 0.0f)) return Rgb(0.0f);
@@ -274,21 +398,18 @@ Rgb PathTracer::guidedSample(const PathState& st, Rng& rng) const {
   g.beta = st.beta * k * (m.albedo() / m.albedoAverage());
   Rgb L(0.0f);
   const bool continuePath = s.strategy().guiding.guided_vertex == GuidedVertex::Path;
-  if (scatterVertex(g, p, m.g(), L, rng, continuePath ? std::min(1.0f, k) : 0.0f) && continuePath) L += trace(g, rng);
+  if (scatterVertex(g, p, m.g(), L, rng, continuePath ? std::min(1.0f, k) : 0.0f) && continuePath) L += trace(g, nullptr, rng);
   return L;
 }
 
-Rgb PathTracer::trace(PathState st, Rng& rng) const {
+Rgb PathTracer::trace(PathState st, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const {
   const Scene& s = scene_;
   const StrategySettings& strategy = s.strategy();
   const auto& lights = s.lights();
   const int maxDepth = s.render().max_depth;
-  const bool gather = strategy.emission.gather_every_collision;
-  const bool emissive = s.hasEmissiveMedia();
   const bool volumeNee = !s.volumeLights().empty();
-  const bool guiding = strategy.guiding.guide != DistanceGuide::None;
-  const bool needTail = emissive && !volumeNee;
-  GuideDensity& guide = tlsGuide;
+  const bool needTail = s.hasEmissiveMedia() && !volumeNee;
+  GuidedDistance guide;  // this path's segment density (a continuing guided vertex traces its own)
   Rgb L(0.0f);
 
   for (;;) {
@@ -307,112 +428,21 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
         (volumeNee && st.prevPdf > 0.0f) ? powerHeuristic(st.prevPdf, volumeLightPdf(st.prevPos, ray.direction)) : 1.0f;
 
     // A guided distance sample for this segment (talk 2.2)? Its density must exist before the
-    // tracked walk, whose scattering is weighted against it.
-    float tIn = 0.0f, tOut = 0.0f;
-    // Thick rays are left to tracking, which scatters there reliably: the choice depends on the ray
-    // alone (never on the walk), so MIS stays valid with the tracked technique alone on them.
-    const float maxDepthTau = strategy.guiding.max_optical_depth;
-    const bool guided = guiding && st.segment < strategy.guiding.guided_segments && !st.lightsTaken && st.vertices < maxDepth &&
-                        mediumInterval(ray, tEnd, tIn, tOut) &&
-                        (maxDepthTau <= 0.0f || majorantOpticalDepth(ray, tIn, tOut) <= maxDepthTau);
-    if (guided) buildGuide(ray, tIn, tOut, guide);
-    PathState segmentStart;  // the guided sample starts from the segment's start, before the walk
-    if (guided) segmentStart = st;
+    // tracked walk, whose scattering is weighted against it; the guided sample starts from the
+    // segment's start, before the walk changes the state.
+    const bool guided = prepareGuide(st, tEnd, cameraGuide, guide);
+    const PathState segmentStart = guided ? st : PathState{};
+    const SegmentWalk walk = walkSegment(st, tEnd, guided, emissionWeight, L, rng);
 
-    enum class Event { None, Absorbed, Scattered } event = Event::None;
-    Vec3 scatterPos(0.0f);
-    float scatterG = 0.0f, scatterT = 0.0f;
-    float nullProbability = 1.0f;  // prod of P_null over this walk's null collisions (for MIS)
-    float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering
-    float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather mode)
-    // The tracked scattering's MIS weight on a guided segment, applied to its NEE only
-    // (guided_vertex = direct) or as its continuation's survival probability (path).
+    // The tracked scattering's MIS weight on a guided segment (METHOD.md s.4): on its NEE only in
+    // guided_vertex = direct (the continuation is the tracked technique's alone, unweighted), or
+    // as its continuation's survival probability in path mode, where the guided vertex does
+    // likewise so that a guided segment continues about one path on average instead of two.
     float trackedDirect = 1.0f, trackedContinue = 1.0f;
-    trackCollisions(s.media(), ray, tEnd, rng, [&](const Collision& c) {
-      float sigmaA = 0.0f, sigmaS = 0.0f;
-      for (int i = 0; i < c.count; ++i) {
-        const float a = c.medium(i).albedoAverage();
-        sigmaS += c.sigmaT[i] * a;
-        sigmaA += c.sigmaT[i] * (1.0f - a);
-      }
-      const float sigmaN = std::max(0.0f, c.muBar - c.sigmaTTotal);
-      const float u = rng.uniform();
-      float pick;  // in [0, sigmaS) when the collision scatters
-      if (gather) {
-        // Talk 2.1 / METHOD.md s.2: P_a = 1, add mu_a Le / mu_bar; continue with absorption as a
-        // weight, choosing scatter with P_s = mu_s / (mu_s + mu_n), both weighted 1 - mu_a / mu_bar.
-        if (emissive) L += st.beta * c.emissionSource() * (emissionWeight / c.muBar);
-        const float keep = (sigmaS + sigmaN) / c.muBar;
-        if (!(keep > 0.0f)) {
-          event = Event::Absorbed;
-          return false;
-        }
-        st.beta *= keep;
-        pick = u * (sigmaS + sigmaN);
-        if (!(pick < sigmaS)) {
-          if (guided) {
-            // Guided segments skip the roulette: its survival probability would enter p_tracked.
-            nullProbability *= sigmaN / (sigmaS + sigmaN);
-            return true;
-          }
-          walkWeight *= keep;
-          if (walkWeight < 0.1f) {
-            // Roulette on the weight lost to absorption along this walk: unbiased, keeps it short.
-            const float survive = walkWeight * 10.0f;
-            if (rng.uniform() >= survive) {
-              event = Event::Absorbed;
-              return false;
-            }
-            st.beta /= survive;
-            walkWeight = 1.0f;
-          }
-          return true;  // null collision
-        }
-        scatterDensity = c.muBar * sigmaS / (sigmaS + sigmaN);
-      } else {
-        // Conventional analog events.
-        const float x = u * c.muBar;
-        if (x < sigmaA) {
-          // Absorption: E[beta * Le] with per-channel mu_a handled by the weight mu_a,rgb / mu_a,avg.
-          if (emissive) L += st.beta * c.emissionSource() * (emissionWeight / sigmaA);
-          event = Event::Absorbed;
-          return false;
-        }
-        pick = x - sigmaA;
-        if (!(pick < sigmaS)) {
-          nullProbability *= sigmaN / c.muBar;
-          return true;  // null collision: the weight mu_n / (P_n mu_bar) is exactly 1
-        }
-        scatterDensity = sigmaS;
-      }
-      // Scattering: pick the medium by its share of mu_s, weight its RGB albedo against the average.
-      int chosen = c.count - 1;
-      for (int i = 0; i < c.count; ++i) {
-        const float si = c.sigmaT[i] * c.medium(i).albedoAverage();
-        if (pick < si) {
-          chosen = i;
-          break;
-        }
-        pick -= si;
-      }
-      const Medium& m = c.medium(chosen);
-      st.beta *= m.albedo() / m.albedoAverage();
-      scatterG = m.g();
-      scatterPos = c.p;
-      scatterT = c.t;
-      event = Event::Scattered;
-      return false;
-    });
-
     if (guided) {
-      // MIS weight of the tracked scattering, then the guided sample from the segment's start.
-      if (event == Event::Scattered) {
-        // The tracked vertex's NEE carries its MIS weight w_t. In guided_vertex = path its
-        // continuation survives with probability w_t (then unweighted): with the guided vertex doing
-        // likewise, a guided segment continues about one path on average instead of two. In direct
-        // mode the continuation is the tracked technique's alone, unweighted.
-        const float pg = guide.pdf(scatterT);
-        const float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(nullProbability * scatterDensity / pg) : 1.0f;
+      if (walk.event == SegmentWalk::Event::Scattered) {
+        const float pg = guide.pdf(walk.scatterT);
+        const float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(walk.nullProbability * walk.scatterDensity / pg) : 1.0f;
         if (strategy.guiding.guided_vertex == GuidedVertex::Path) {
           st.beta *= trackedWeight;
           trackedContinue = trackedWeight;
@@ -420,12 +450,12 @@ Rgb PathTracer::trace(PathState st, Rng& rng) const {
           trackedDirect = trackedWeight;
         }
       }
-      L += guidedSample(segmentStart, rng);
+      L += guidedSample(segmentStart, guide, rng);
     }
-    if (event == Event::Absorbed) break;
+    if (walk.event == SegmentWalk::Event::Absorbed) break;
 
-    if (event == Event::Scattered) {
-      if (isBlack(st.beta) || !scatterVertex(st, scatterPos, scatterG, L, rng, trackedContinue, trackedDirect)) break;
+    if (walk.event == SegmentWalk::Event::Scattered) {
+      if (isBlack(st.beta) || !scatterVertex(st, walk.scatterPos, walk.scatterG, L, rng, trackedContinue, trackedDirect)) break;
       continue;
     }
 

@@ -28,7 +28,7 @@
 
 namespace candela {
 
-struct GuideDensity;  // integrator.cpp: the guided distance density of one ray segment
+class CameraGuides;  // camera_guides.h: per-pixel camera-ray guide tables reused across passes
 
 class PathTracer {
  public:
@@ -36,6 +36,14 @@ class PathTracer {
   // Radiance arriving along the camera ray (scene-linear RGB). May be non-finite on a bug; the film
   // rejects and counts such samples.
   Rgb radiance(const Ray& cameraRay, Rng& rng) const;
+  // The same, with the camera ray's guided density borrowed from `cameraGuide` (a unit-interval
+  // table for the ray's pixel; null: built for the ray as usual).
+  Rgb radiance(const Ray& cameraRay, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const;
+
+  // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy
+  // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
+  // no medium, or thicker than guiding.max_optical_depth). For the inspector and the camera cache.
+  bool guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out) const;
 
   // Light scattered toward wo at a medium point with HG parameter g, by light sampling alone: the
   // phase-weighted direct light, emissive volumes included (one light chosen by the light sampler).
@@ -59,21 +67,25 @@ class PathTracer {
     float prevPdf = 0.0f;      // solid-angle pdf of the direction that made `ray` (0: camera ray)
     Vec3 prevPos{0.0f};
   };
+  struct SegmentWalk;  // what the tracked walk of one segment found (integrator.cpp)
 
-  // Follows a path from its current ray to the end; returns the radiance it gathers.
-  Rgb trace(PathState state, Rng& rng) const;
+  // Follows a path from its current ray to the end; returns the radiance it gathers. The camera
+  // ray's guided density comes from `cameraGuide` when given.
+  Rgb trace(PathState state, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const;
+  // The tracked walk along one segment (METHOD.md s.2): the one tracking loop with the strategy's
+  // event probabilities (analogEvent or gatherEvent) as its collision callback. Adds emission to L.
+  SegmentWalk walkSegment(PathState& state, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const;
+  // Distance-sampler choice for one segment: whether it gets a guided sample, and its density.
+  bool prepareGuide(const PathState& state, float tEnd, const PiecewiseLinearDistance* cameraGuide, GuidedDistance& guide) const;
   // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
   // false when the path ends there. The NEE is scaled by `directWeight` (an MIS weight on guided
   // segments); the continuation (not the NEE) survives with probability `continueProbability`
   // first (used to spend about one continuation per guided segment in guided_vertex = path).
   bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f,
                      float directWeight = 1.0f) const;
-  // The guided distance sample of one ray segment (METHOD.md s.4): its vertex's direct light, and with
-  // guided_vertex = path also the path continuing from it. It samples the density built for this
-  // segment (tlsGuide in integrator.cpp).
-  Rgb guidedSample(const PathState& state, Rng& rng) const;
-  // The guided distance density for a ray over [tIn, tOut].
-  void buildGuide(const Ray& ray, float tIn, float tOut, GuideDensity& out) const;
+  // The guided distance sample of one ray segment (METHOD.md s.4), drawn from `guide`: its
+  // vertex's direct light, and with guided_vertex = path also the path continuing from it.
+  Rgb guidedSample(const PathState& state, const GuidedDistance& guide, Rng& rng) const;
   // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
   bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).

@@ -32,6 +32,14 @@ bool mayScatterNear(const Scene& scene, const Vec3& p, float r) {
 
 }  // namespace
 
+Vec3 uniformInBall(const Vec3& center, float radius, Rng& rng) {
+  Vec3 y;
+  do {
+    y = Vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0f - 1.0f;
+  } while (glm::dot(y, y) > 1.0f);
+  return center + y * radius;
+}
+
 std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const GuidingSettings& settings, const std::atomic<bool>* cancel) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -76,9 +84,11 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
   for (const EmissionLight* v : scene.volumeLights()) set->lights_.push_back({ProbeLight::Kind::Position, v->centroid()});
   const size_t lightCount = set->lights_.size();
 
-  // Learn in parallel; a probe not started before the deadline (or a cancel) is dropped.
+  // Learn in parallel, every probe with the same sample count and its own random stream, so the set
+  // is the same whatever the thread count or machine load. A probe not started before the safety
+  // cap (or a cancel) is dropped; complete() then says so and callers warn.
   const PathTracer tracer(scene);
-  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.probe_budget_s));
+  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.probe_time_cap_s));
   std::vector<float> weights(centers.size() * lightCount, 0.0f), gs(centers.size(), 0.0f);
   std::vector<char> learned(centers.size(), 0);
   tbb::parallel_for(size_t{0}, centers.size(), [&](size_t i) {
@@ -87,12 +97,7 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
     std::vector<double> sums(lightCount, 0.0);
     double sigmaSSum = 0.0, gSum = 0.0;
     for (int s = 0; s < settings.probe_samples; ++s) {
-      // y uniform in the ball of radius r around the probe.
-      Vec3 y;
-      do {
-        y = Vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0f - 1.0f;
-      } while (glm::dot(y, y) > 1.0f);
-      y = centers[i] + y * set->radius_;
+      const Vec3 y = uniformInBall(centers[i], set->radius_, rng);
       const Scene::PointCoefficients c = scene.coefficientsAt(y);
       if (!(c.sigmaS > 0.0f)) continue;
       sigmaSSum += c.sigmaS;
@@ -117,6 +122,14 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
   set->buildLookup(lo);
   set->seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
   return set;
+}
+
+std::string ProbeSet::incompleteWarning() const {
+  if (complete()) return {};
+  return "strategy.guiding.probe_time_cap_s: probe learning was cut by its safety cap after " + std::to_string(seconds_) + " s (" +
+         std::to_string(probes_.size()) + " of " + std::to_string(placed_) +
+         " probes learned): the noise of this render now depends on machine speed; raise the cap or lower "
+         "strategy.guiding.probe_samples";
 }
 
 void ProbeSet::buildLookup(const Vec3& latticeOrigin) {
@@ -191,9 +204,10 @@ void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, std::vector<Dista
       stamps[index] = query;
       const Probe& p = probes_[index];
       const float t = glm::dot(p.center - ray.origin, ray.direction);
-      const Vec3 off = ray.at(t) - p.center;
+      const Vec3 x = ray.at(t);
+      const Vec3 off = x - p.center;
       if (glm::dot(off, off) > r2 || t < t0 - radius_ || t > t1 + radius_) continue;
-      knots.push_back({t, weight(index, -ray.direction, ray.at(t))});
+      knots.push_back({t, weight(index, -ray.direction, x)});
     }
   }
 }

@@ -17,10 +17,12 @@
 
 #include "distance_sampler.h"
 #include "majorant.h"
+#include "rng.h"
 #include "settings.h"
 
 #include <atomic>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace candela {
@@ -42,10 +44,14 @@ struct ProbeLight {
   Vec3 v{0.0f};
 };
 
+// A point uniform in the ball of radius `radius` around `center`: the domain a probe learns over.
+Vec3 uniformInBall(const Vec3& center, float radius, Rng& rng);
+
 class ProbeSet {
  public:
-  // Places and learns probes for the scene as it is now; stops at the settings' time budget or when
-  // `cancel` becomes true (probes not reached are dropped).
+  // Places and learns probes for the scene as it is now, probe_samples light samples per probe
+  // (deterministic for a seed). Stops only at the settings' safety cap on time or when `cancel`
+  // becomes true; probes not reached are then dropped and complete() is false.
   static std::shared_ptr<const ProbeSet> learn(const Scene& scene, const GuidingSettings& settings,
                                                const std::atomic<bool>* cancel = nullptr);
 
@@ -60,6 +66,8 @@ class ProbeSet {
   int placed() const { return placed_; }          // lattice points kept before learning
   double learnSeconds() const { return seconds_; }
   bool complete() const { return static_cast<int>(probes_.size()) == placed_; }
+  // The warning to show when learning was cut by the time cap (empty when complete).
+  std::string incompleteWarning() const;
 
   // Appends a knot for each probe whose sphere the ray crosses within [t0, t1]: at the probe's
   // projection t on the ray, with value s(-ray direction) at ray.at(t).

@@ -135,6 +135,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       scene->relearnProbesAsync();
     } else {
       scene->learnProbes();
+      if (warnings && !scene->probes()->complete()) warnings->push_back(scene->probes()->incompleteWarning());
     }
   }
   return scene;
@@ -173,7 +174,7 @@ void Scene::setStrategy(const StrategySettings& strategy) {
   buildLightSampler();
   const GuidingSettings& g = strategy.guiding;
   const bool probeSettingsChanged = before.probe_spacing != g.probe_spacing || before.probe_radius != g.probe_radius ||
-                                    before.probe_samples != g.probe_samples || before.probe_budget_s != g.probe_budget_s;
+                                    before.probe_samples != g.probe_samples || before.probe_time_cap_s != g.probe_time_cap_s;
   if (g.guide == DistanceGuide::Probes && (!probes() || probeSettingsChanged)) learnProbes();
 }
 
