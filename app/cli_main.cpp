@@ -5,6 +5,7 @@
 //                     [--sweep KEY=V1,V2,...]
 //   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
 #include "convergence.h"
+#include "guide_inspector.h"
 #include "procedural.h"
 #include "renderer.h"
 #include "scene.h"
@@ -204,6 +205,32 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
   return 0;
 }
 
+// The guide inspector along one pixel's camera ray (or a secondary ray of a path chosen by seed):
+// the ideal, guided, tracked and MIS densities as CSV and SVG, and each one's variance factor.
+int inspect(const std::string& scenePath, const std::vector<int>& pixel, int secondarySeed, int lightSamples, const std::string& preset,
+            const std::vector<std::string>& sets, const std::string& outDir) {
+  const SceneDesc desc = sceneWith(scenePath, preset, sets);
+  if (pixel[0] >= desc.camera.resolution.first || pixel[1] >= desc.camera.resolution.second)
+    throw InputError("--pixel: expected a pixel inside the " + std::to_string(desc.camera.resolution.first) + "x" +
+                     std::to_string(desc.camera.resolution.second) + " image, got " + std::to_string(pixel[0]) + "," + std::to_string(pixel[1]));
+  auto scene = buildScene(desc);
+  GuideInspectOptions options;
+  options.secondary_seed = secondarySeed;
+  options.light_samples = lightSamples;
+  const auto t0 = std::chrono::steady_clock::now();
+  const GuideInspection r = inspectGuide(*scene, pixel[0], pixel[1], options);
+  std::filesystem::create_directories(outDir);
+  const std::string stem = std::filesystem::path(scenePath).stem().string() + "-" + std::to_string(pixel[0]) + "-" + std::to_string(pixel[1]) +
+                           (secondarySeed >= 0 ? "-secondary" + std::to_string(secondarySeed) : "");
+  const std::string csv = (std::filesystem::path(outDir) / (stem + ".csv")).string();
+  const std::string svg = (std::filesystem::path(outDir) / (stem + ".svg")).string();
+  writeInspectionCsv(csv, r);
+  writeInspectionSvg(svg, r, stem + " (" + desc.strategy.preset + "): distance densities along the " + (r.segment ? "secondary" : "camera") + " ray");
+  std::printf("%s\n(%.2f s)\nwrote %s and %s\n", inspectionSummary(r).c_str(),
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), csv.c_str(), svg.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -260,11 +287,23 @@ int main(int argc, char** argv) {
   rep->add_option("-o,--output", out, "Output directory")->required();
   rep->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
 
+  std::vector<int> pixel;
+  int secondarySeed = -1, lightSamples = 256;
+  auto* ins = app.add_subcommand("inspect", "Guide inspector: distance densities along a pixel's ray (ideal, guided, tracked, MIS) with variance factors");
+  ins->add_option("scene", scenePath, "Scene JSON file")->required()->check(CLI::ExistingFile);
+  ins->add_option("--pixel", pixel, "X,Y of the pixel (0,0 top left)")->delimiter(',')->expected(2)->required()->check(CLI::NonNegativeNumber);
+  ins->add_option("--secondary", secondarySeed, "Inspect the secondary ray of the path chosen by this seed instead")->check(CLI::NonNegativeNumber);
+  ins->add_option("--light-samples", lightSamples, "Light samples per point for the ideal curve")->check(CLI::Range(1, 1 << 20));
+  ins->add_option("--strategy", preset, "Strategy preset");
+  ins->add_option("--set", sets, "Edit any scene or strategy parameter by JSON path");
+  ins->add_option("-o,--output", out, "Output directory")->required();
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (rep->parsed()) return runReport(quick, out, threads);
     if (r->parsed()) return render(scenePath, out, spp, seconds, seed, threads, preset, sets);
     if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets, sweep);
+    if (ins->parsed()) return inspect(scenePath, pixel, secondarySeed, lightSamples, preset, sets, out);
     if (g->parsed()) {
       gen.type = genType;
       if (size.size() == 3) gen.size = Vec3(size[0], size[1], size[2]);

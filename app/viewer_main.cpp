@@ -30,6 +30,9 @@ int main(int argc, char** argv) {
   app.add_flag("--quit", o.quit, "Quit after the screenshot (or at once when there is none)");
   app.add_option("--measure-latency", o.measureEdits, "Make N scripted edits and print edit-to-first-image latency and UI fps")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--inspect", o.inspectPixel, "Open the guide inspector on pixel X,Y once the first image is shown (Ctrl+click does it live)")
+      ->delimiter(',')
+      ->expected(2);
   app.add_option("--edit", o.editsAfterStart, "Apply a key=value edit once the first image is shown (as if typed in the panel)");
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");

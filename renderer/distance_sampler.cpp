@@ -34,42 +34,42 @@ void PiecewiseLinearDistance::build(float t0, float t1, std::vector<DistanceKnot
   if (area_ > 0.0f && std::isfinite(area_)) uniformShare_ = floor;
 }
 
-float PiecewiseLinearDistance::linear(float t) const {
-  if (t < t0_ || t > t1_ || ts_.empty()) return 0.0f;
-  const size_t i = static_cast<size_t>(std::upper_bound(ts_.begin(), ts_.end(), t) - ts_.begin());
-  if (i == 0) return vs_.front();
-  if (i >= ts_.size()) return vs_.back();
-  const float dt = ts_[i] - ts_[i - 1];
-  const float f = dt > 0.0f ? (t - ts_[i - 1]) / dt : 0.0f;
-  return vs_[i - 1] + f * (vs_[i] - vs_[i - 1]);
+float PiecewiseLinearView::linear(float t) const {
+  if (t < t0 || t > t1 || n == 0) return 0.0f;
+  const uint32_t i = static_cast<uint32_t>(std::upper_bound(ts, ts + n, t) - ts);
+  if (i == 0) return vs[0];
+  if (i >= n) return vs[n - 1];
+  const float dt = ts[i] - ts[i - 1];
+  const float f = dt > 0.0f ? (t - ts[i - 1]) / dt : 0.0f;
+  return vs[i - 1] + f * (vs[i] - vs[i - 1]);
 }
 
-float PiecewiseLinearDistance::pdf(float t) const {
-  if (t < t0_ || t > t1_) return 0.0f;
-  const float uniform = uniformShare_ / (t1_ - t0_);
-  if (uniformShare_ >= 1.0f) return uniform;
-  return uniform + (1.0f - uniformShare_) * linear(t) / area_;
+float PiecewiseLinearView::pdf(float t) const {
+  if (t < t0 || t > t1) return 0.0f;
+  const float uniform = uniformShare / (t1 - t0);
+  if (uniformShare >= 1.0f) return uniform;
+  return uniform + (1.0f - uniformShare) * linear(t) / area;
 }
 
-float PiecewiseLinearDistance::sample(float u, float& pdfOut) const {
+float PiecewiseLinearView::sample(float u, float& pdfOut) const {
   float t;
-  if (u < uniformShare_) {
-    t = t0_ + (u / uniformShare_) * (t1_ - t0_);
+  if (u < uniformShare) {
+    t = t0 + (u / uniformShare) * (t1 - t0);
   } else {
-    const float target = (u - uniformShare_) / (1.0f - uniformShare_) * area_;
-    size_t i = static_cast<size_t>(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin());
-    i = std::clamp<size_t>(i, 1, cdf_.size() - 1);  // segment i-1 spans [ts_[i-1], ts_[i]]
-    while (i + 1 < cdf_.size() && cdf_[i] == cdf_[i - 1]) ++i;  // skip zero-area segments
-    const float a = target - cdf_[i - 1];
-    const float v0 = vs_[i - 1], v1 = vs_[i], dt = ts_[i] - ts_[i - 1];
+    const float target = (u - uniformShare) / (1.0f - uniformShare) * area;
+    uint32_t i = static_cast<uint32_t>(std::upper_bound(cdf, cdf + n, target) - cdf);
+    i = std::clamp<uint32_t>(i, 1, n - 1);  // segment i-1 spans [ts[i-1], ts[i]]
+    while (i + 1 < n && cdf[i] == cdf[i - 1]) ++i;  // skip zero-area segments
+    const float a = target - cdf[i - 1];
+    const float v0 = vs[i - 1], v1 = vs[i], dt = ts[i] - ts[i - 1];
     const float slope = dt > 0.0f ? (v1 - v0) / dt : 0.0f;
     // Solve v0 x + slope x^2 / 2 = a for x in [0, dt] (stable form of the quadratic root).
     const float disc = std::max(0.0f, v0 * v0 + 2.0f * slope * a);
     const float denom = v0 + std::sqrt(disc);
     const float x = denom > 0.0f ? 2.0f * a / denom : 0.0f;
-    t = ts_[i - 1] + std::clamp(x, 0.0f, dt);
+    t = ts[i - 1] + std::clamp(x, 0.0f, dt);
   }
-  t = std::clamp(t, t0_, t1_);
+  t = std::clamp(t, t0, t1);
   pdfOut = pdf(t);
   return t;
 }
@@ -132,9 +132,9 @@ void GuidedDistance::buildEquiAngular(const Ray& ray, float t0, float t1, const 
   equiAngular_.build(ray, t0, t1, targets);
 }
 
-void GuidedDistance::borrow(const PiecewiseLinearDistance& unit, float t0, float t1) {
+void GuidedDistance::borrow(const PiecewiseLinearView& unit, float t0, float t1) {
   kind_ = Kind::Borrowed;
-  unit_ = &unit;
+  unit_ = unit;
   t0_ = t0;
   length_ = std::max(t1 - t0, 1e-7f);
 }
@@ -144,7 +144,7 @@ float GuidedDistance::sample(float u, float& pdf) const {
     case Kind::Linear: return linear_.sample(u, pdf);
     case Kind::EquiAngular: return equiAngular_.sample(u, pdf);
     case Kind::Borrowed: {
-      const float x = unit_->sample(u, pdf);
+      const float x = unit_.sample(u, pdf);
       pdf /= length_;
       return t0_ + x * length_;
     }
@@ -157,7 +157,7 @@ float GuidedDistance::pdf(float t) const {
   switch (kind_) {
     case Kind::Linear: return linear_.pdf(t);
     case Kind::EquiAngular: return equiAngular_.pdf(t);
-    case Kind::Borrowed: return unit_->pdf((t - t0_) / length_) / length_;
+    case Kind::Borrowed: return unit_.pdf((t - t0_) / length_) / length_;
   }
   return 0.0f;
 }

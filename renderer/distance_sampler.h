@@ -19,17 +19,37 @@ struct DistanceKnot {
   float value = 0.0f;
 };
 
+// A piecewise-linear density's tables, stored elsewhere (a PiecewiseLinearDistance, or a pixel's
+// entry in the camera-ray cache): segment ends ts, values vs at them, cumulative area cdf, n each.
+struct PiecewiseLinearView {
+  const float* ts = nullptr;
+  const float* vs = nullptr;
+  const float* cdf = nullptr;
+  uint32_t n = 0;
+  float t0 = 0.0f, t1 = 1.0f;
+  float area = 0.0f;
+  float uniformShare = 1.0f;  // the floor (1 when there is nothing to follow)
+
+  float sample(float u, float& pdf) const;
+  float pdf(float t) const;
+
+ private:
+  float linear(float t) const;
+};
+
 class PiecewiseLinearDistance {
  public:
   // Knots may be unsorted (they are sorted here) and may lie outside [t0, t1] (clamped).
   void build(float t0, float t1, std::vector<DistanceKnot>& knots, float floor);
-  float sample(float u, float& pdf) const;
-  float pdf(float t) const;
+  float sample(float u, float& pdf) const { return view().sample(u, pdf); }
+  float pdf(float t) const { return view().pdf(t); }
   float t0() const { return t0_; }
   float t1() const { return t1_; }
+  PiecewiseLinearView view() const {
+    return {ts_.data(), vs_.data(), cdf_.data(), static_cast<uint32_t>(ts_.size()), t0_, t1_, area_, uniformShare_};
+  }
 
  private:
-  float linear(float t) const;
   float t0_ = 0.0f, t1_ = 1.0f;
   float uniformShare_ = 1.0f;  // floor (1 when there is nothing to follow)
   std::vector<float> ts_, vs_, cdf_;  // segment ends, values at them, cumulative area
@@ -69,8 +89,8 @@ class GuidedDistance {
   // From `knots` (sorted and clamped here).
   void buildPiecewiseLinear(float t0, float t1, float floor);
   void buildEquiAngular(const Ray& ray, float t0, float t1, const std::vector<EquiAngularTarget>& targets);
-  // Borrows `unit` (over [0, 1]; it must outlive this density's use) for [t0, t1].
-  void borrow(const PiecewiseLinearDistance& unit, float t0, float t1);
+  // Borrows `unit` (a density over [0, 1] whose tables outlive this density's use) for [t0, t1].
+  void borrow(const PiecewiseLinearView& unit, float t0, float t1);
 
   float sample(float u, float& pdf) const;
   float pdf(float t) const;
@@ -79,7 +99,7 @@ class GuidedDistance {
   enum class Kind { Linear, EquiAngular, Borrowed } kind_ = Kind::Linear;
   PiecewiseLinearDistance linear_;
   EquiAngularDistance equiAngular_;
-  const PiecewiseLinearDistance* unit_ = nullptr;
+  PiecewiseLinearView unit_;
   float t0_ = 0.0f, length_ = 1.0f;
 };
 

@@ -191,7 +191,7 @@ float PathTracer::unphasedIncident(const Vec3& p, int index, Rng& rng) const {
 
 Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const { return radiance(cameraRay, nullptr, rng); }
 
-Rgb PathTracer::radiance(const Ray& cameraRay, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const {
+Rgb PathTracer::radiance(const Ray& cameraRay, const PiecewiseLinearView* cameraGuide, Rng& rng) const {
   PathState state;
   state.ray = cameraRay;
   state.prevPos = cameraRay.origin;
@@ -205,7 +205,9 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
   ++st.vertices;
   const bool last = st.vertices == s.render().max_depth;
   const Vec3 wo = -st.ray.direction;
-  L += st.beta * directWeight * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng);
+  // A zero MIS weight (the guided technique owns all direct light: guiding.combination =
+  // guided_only) skips the NEE's rays entirely.
+  if (directWeight > 0.0f) L += st.beta * directWeight * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng);
   if (last) {
     // After the last vertex only volume emission that no light sampler covers is still missing.
     if (!s.hasEmissiveMedia() || !s.volumeLights().empty()) return false;
@@ -348,7 +350,7 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
   return walk;
 }
 
-bool PathTracer::prepareGuide(const PathState& st, float tEnd, const PiecewiseLinearDistance* cameraGuide, GuidedDistance& guide) const {
+bool PathTracer::prepareGuide(const PathState& st, float tEnd, const PiecewiseLinearView* cameraGuide, GuidedDistance& guide) const {
   const GuidingSettings& g = scene_.strategy().guiding;
   if (g.guide == DistanceGuide::None || st.segment >= g.guided_segments || st.lightsTaken || st.vertices >= scene_.render().max_depth)
     return false;
@@ -402,7 +404,7 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   return L;
 }
 
-Rgb PathTracer::trace(PathState st, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const {
+Rgb PathTracer::trace(PathState st, const PiecewiseLinearView* cameraGuide, Rng& rng) const {
   const Scene& s = scene_;
   const StrategySettings& strategy = s.strategy();
   const auto& lights = s.lights();

@@ -38,7 +38,7 @@ class PathTracer {
   Rgb radiance(const Ray& cameraRay, Rng& rng) const;
   // The same, with the camera ray's guided density borrowed from `cameraGuide` (a unit-interval
   // table for the ray's pixel; null: built for the ray as usual).
-  Rgb radiance(const Ray& cameraRay, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const;
+  Rgb radiance(const Ray& cameraRay, const PiecewiseLinearView* cameraGuide, Rng& rng) const;
 
   // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy
   // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
@@ -57,6 +57,13 @@ class PathTracer {
   // sum_m pmf_m p_m(w) over emissive volumes (Algorithm 2 for each).
   float volumeLightPdf(const Vec3& x, const Vec3& w) const;
 
+  // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
+  bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
+  // The probe set this tracer samples (null without probe guiding).
+  const ProbeSet* probes() const { return probes_.get(); }
+  // Distance to the nearest surface or (opaque) sphere light along a ray; infinity when none.
+  float nearestOccluder(const Ray& ray) const;
+
  private:
   struct PathState {
     Ray ray;
@@ -71,12 +78,12 @@ class PathTracer {
 
   // Follows a path from its current ray to the end; returns the radiance it gathers. The camera
   // ray's guided density comes from `cameraGuide` when given.
-  Rgb trace(PathState state, const PiecewiseLinearDistance* cameraGuide, Rng& rng) const;
+  Rgb trace(PathState state, const PiecewiseLinearView* cameraGuide, Rng& rng) const;
   // The tracked walk along one segment (METHOD.md s.2): the one tracking loop with the strategy's
   // event probabilities (analogEvent or gatherEvent) as its collision callback. Adds emission to L.
   SegmentWalk walkSegment(PathState& state, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const;
   // Distance-sampler choice for one segment: whether it gets a guided sample, and its density.
-  bool prepareGuide(const PathState& state, float tEnd, const PiecewiseLinearDistance* cameraGuide, GuidedDistance& guide) const;
+  bool prepareGuide(const PathState& state, float tEnd, const PiecewiseLinearView* cameraGuide, GuidedDistance& guide) const;
   // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
   // false when the path ends there. The NEE is scaled by `directWeight` (an MIS weight on guided
   // segments); the continuation (not the NEE) survives with probability `continueProbability`
@@ -86,8 +93,6 @@ class PathTracer {
   // The guided distance sample of one ray segment (METHOD.md s.4), drawn from `guide`: its
   // vertex's direct light, and with guided_vertex = path also the path continuing from it.
   Rgb guidedSample(const PathState& state, const GuidedDistance& guide, Rng& rng) const;
-  // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
-  bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
   float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
   // MIS weight of the guided technique given r = p_tracked / p_guided.
@@ -95,7 +100,6 @@ class PathTracer {
 
   Rgb directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis, Rng& rng) const;
   float visibility(const Vec3& p, const Vec3& wi, float distance, int targetLight, Rng& rng) const;
-  float nearestOccluder(const Ray& ray) const;
 
   const Scene& scene_;
   std::shared_ptr<const ProbeSet> probes_;  // the set serving this tracer (swapped sets never disturb it)

@@ -23,6 +23,9 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   const uint64_t seed = scene_->render().seed;
   std::atomic<bool> cancelled{false};
   PathTracer tracer(*scene_);
+  // Camera rays of the scene's own camera borrow their pixel's cached guide table (camera_guides.h);
+  // a preview's override camera builds per ray.
+  const bool cachedGuides = !cameraOverride && cameraGuides_.prepare(*scene_, tracer, camera);
 
   auto renderTile = [&](int tile) {
     const int x0 = (tile % tilesX) * options_.tileSize, y0 = (tile / tilesX) * options_.tileSize;
@@ -38,7 +41,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
           Rng rng(hashCombine(pixelKey, static_cast<uint64_t>(firstSample + s)), pixelKey);
           const float jx = rng.uniform(), jy = rng.uniform();
           const Ray ray = camera.generate(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
-          pass.addSample(x, y, tracer.radiance(ray, rng));
+          pass.addSample(x, y, tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng));
         }
       }
   };

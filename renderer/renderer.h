@@ -5,6 +5,7 @@
 // whatever the thread count or tile schedule.
 #pragma once
 
+#include "camera_guides.h"
 #include "film.h"
 #include "integrator.h"
 #include "scene.h"
@@ -33,10 +34,12 @@ class ProgressiveRenderer {
   double renderBudget(Film& film, int spp, double seconds, int passSpp = 1);
 
   const Scene& scene() const { return *scene_; }
+  const CameraGuides& cameraGuides() const { return cameraGuides_; }
 
  private:
   std::shared_ptr<const Scene> scene_;
   RenderOptions options_;
+  CameraGuides cameraGuides_;  // per-pixel camera-ray guide tables, kept across passes
 };
 
 }  // namespace candela

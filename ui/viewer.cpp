@@ -4,6 +4,7 @@
 #include "comparison_session.h"
 #include "error_chart.h"
 #include "gl_display.h"
+#include "guide_inspector_view.h"
 #include "image_io.h"
 #include "param_editor.h"
 #include "render_session.h"
@@ -284,6 +285,8 @@ class Viewer {
   Keys keys_;
   int dragButton_ = -1;
   bool readoutLocked_ = false;
+  GuideInspectorView inspector_;  // Ctrl+click on a pixel
+  bool inspectDone_ = false;
   int lockedX_ = 0, lockedY_ = 0;
 
   uint64_t latencyRequest_ = 0;
@@ -664,6 +667,13 @@ void Viewer::handleCamera() {
       return;
     }
   }
+  // Ctrl+click inspects the pixel's distance densities (guide_inspector_view.h) instead of tumbling.
+  if (io.KeyCtrl && dragButton_ < 0 && !io.WantCaptureMouse && io.MouseClicked[0] && r.contains(io.MousePos.x, io.MousePos.y) && frame_) {
+    const ImVec2 uv = imageUv(r, io.MousePos);
+    inspector_.request(edited_, static_cast<int>(uv.x * edited_.camera.resolution.first),
+                       static_cast<int>(uv.y * edited_.camera.resolution.second));
+    return;
+  }
   // Start a drag only on the image and only when ImGui does not want the mouse.
   if (dragButton_ < 0 && !io.WantCaptureMouse && r.contains(io.MousePos.x, io.MousePos.y)) {
     for (int b = 0; b < 3; ++b)
@@ -789,6 +799,7 @@ void Viewer::drawMenuBar() {
     ImGui::MenuItem("Messages", nullptr, &showMessages_);
     ImGui::TextDisabled("Mouse on the image: left tumble, middle track, right dolly, wheel dolly (Alt optional)");
     ImGui::TextDisabled("Image: Ctrl+wheel zoom, Shift+left drag pan, 0 fit (all panes together)");
+    ImGui::TextDisabled("Ctrl+click a pixel: guide inspector (distance densities along its ray)");
     ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot");
     ImGui::EndMenu();
   }
@@ -1096,6 +1107,11 @@ void Viewer::scripted() {
     std::printf("UI frame rate while rendering: %.1f fps over %.1f s\n", measureFrames_ / wall, wall);
     std::fflush(stdout);
   }
+  if (options_.inspectPixel.size() == 2 && !inspectDone_) {
+    inspector_.request(edited_, options_.inspectPixel[0], options_.inspectPixel[1]);
+    inspectDone_ = true;
+  }
+  if (inspectDone_ && !inspector_.finished()) return;  // a scripted screenshot shows the chart
   if (!options_.screenshotPath.empty() && !screenshotDone_) {
     const bool ready = (options_.afterSpp > 0 && frame_->film.spp() >= options_.afterSpp) ||
                        (options_.afterSeconds > 0.0 && frame_->seconds >= options_.afterSeconds) ||
@@ -1138,6 +1154,7 @@ int Viewer::run() {
       drawMenuBar();
       drawStatusBar();
       drawPanel();
+      inspector_.draw();
       drawOpenDialog();
       drawPaneLabels();
       handleCamera();

@@ -36,6 +36,9 @@ struct ViewerOptions {
   // Scripted edit applied once the first full frame is shown (a --set style key=value), to test
   // bad edits in the app.
   std::vector<std::string> editsAfterStart;
+  // Open the guide inspector on this pixel once the first image is shown (as a Ctrl+click would);
+  // a scripted screenshot then waits for its chart.
+  std::vector<int> inspectPixel;
 };
 
 // Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.

@@ -1,0 +1,73 @@
+#include "camera_guides.h"
+
+#include "integrator.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cstdio>
+
+namespace candela {
+
+bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera) {
+  const GuidingSettings& g = scene.strategy().guiding;
+  if (g.guide != DistanceGuide::Probes) return false;
+  char identity[64];
+  std::snprintf(identity, sizeof identity, "%p/%p/", static_cast<const void*>(&scene), static_cast<const void*>(tracer.probes()));
+  const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(g).dump();
+  if (key == key_) return true;
+  key_ = key;
+  ++builds_;
+  width_ = camera.width();
+  height_ = camera.height();
+  const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  views_.assign(pixels, PiecewiseLinearView{});
+  present_.assign(pixels, 0);
+  // Rows in parallel, each into its own buffer; then one flat array and the views into it.
+  std::vector<std::vector<float>> rows(static_cast<size_t>(height_));
+  std::vector<std::vector<uint32_t>> offsets(static_cast<size_t>(height_));
+  tbb::parallel_for(0, height_, [&](int y) {
+    GuidedDistance guide;
+    PiecewiseLinearDistance unit;
+    std::vector<float>& row = rows[static_cast<size_t>(y)];
+    offsets[static_cast<size_t>(y)].assign(static_cast<size_t>(width_), 0);
+    for (int x = 0; x < width_; ++x) {
+      const Ray ray = camera.generate(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
+      float tIn, tOut;
+      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      if (!tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, guide)) continue;
+      const float length = std::max(tOut - tIn, 1e-7f);
+      for (DistanceKnot& k : guide.knots) k.t = (k.t - tIn) / length;
+      unit.build(0.0f, 1.0f, guide.knots, g.floor);
+      const PiecewiseLinearView v = unit.view();
+      PiecewiseLinearView& stored = views_[i];
+      stored = v;
+      stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into `data_` below
+      offsets[static_cast<size_t>(y)][static_cast<size_t>(x)] = static_cast<uint32_t>(row.size());
+      row.insert(row.end(), v.ts, v.ts + v.n);
+      row.insert(row.end(), v.vs, v.vs + v.n);
+      row.insert(row.end(), v.cdf, v.cdf + v.n);
+      present_[i] = 1;
+    }
+  });
+  size_t total = 0;
+  for (const auto& r : rows) total += r.size();
+  data_.clear();
+  data_.reserve(total);
+  for (int y = 0; y < height_; ++y) {
+    const size_t base = data_.size();
+    const auto& row = rows[static_cast<size_t>(y)];
+    data_.insert(data_.end(), row.begin(), row.end());
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      if (!present_[i]) continue;
+      PiecewiseLinearView& v = views_[i];
+      const float* start = data_.data() + base + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
+      v.ts = start;
+      v.vs = start + v.n;
+      v.cdf = start + 2 * v.n;
+    }
+  }
+  return true;
+}
+
+}  // namespace candela
