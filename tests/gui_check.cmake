@@ -20,6 +20,13 @@ if(MODE STREQUAL "screenshot")
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[320,180]
               --screenshot ${OUT}/gui.png --after-spp 8 --quit)
   run_checked(${COMPARE} ${OUT}/gui.png ${OUT}/gui.exr ${OUT}/cli.exr 8)
+elseif(MODE STREQUAL "inspect")
+  # The guide inspector opened on a pixel as a Ctrl+click would: its chart's variance factors.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy full --set camera.resolution=[160,90] --inspect 95,40
+              --screenshot ${OUT}/inspect.png --after-spp 2 --quit)
+  if(NOT LAST_OUTPUT MATCHES "inspector: pixel \\(95, 40\\), full, camera ray: .*guided [0-9.]+, tracked [0-9.]+, mis [0-9.]+")
+    message(FATAL_ERROR "no inspection reported")
+  endif()
 elseif(MODE STREQUAL "bad_input")
   # A bad OCIO config and an absurd edit typed into a field: visible messages, the last good scene
   # keeps rendering, the screenshot is still taken and the app exits cleanly.

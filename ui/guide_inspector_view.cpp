@@ -18,10 +18,24 @@ bool GuideInspectorView::finished() const {
   return !running_ && (result_ != nullptr || !error_.empty());
 }
 
+std::string GuideInspectorView::summary() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (result_) return title_ + ": " + inspectionSummary(*result_);
+  return error_;
+}
+
 void GuideInspectorView::request(const SceneDesc& desc, int x, int y) {
-  join();  // one at a time: an inspection takes a fraction of a second
   desc_ = desc, x_ = x, y_ = y, open_ = true;
+  pending_ = true;
+  if (!busy()) start();
+}
+
+void GuideInspectorView::start() {
+  join();  // the last one has finished: joining is immediate
+  pending_ = false;
   running_ = true;
+  const SceneDesc desc = desc_;
+  const int x = x_, y = y_;
   const int seed = secondarySeed_;
   worker_ = std::thread([this, desc, x, y, seed] {
     std::shared_ptr<const GuideInspection> r;
@@ -46,6 +60,7 @@ void GuideInspectorView::request(const SceneDesc& desc, int x, int y) {
 }
 
 void GuideInspectorView::draw() {
+  if (pending_ && !busy()) start();
   if (!open_) return;
   ImGui::SetNextWindowSize(ImVec2(620, 380), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowPos(ImVec2(40, 60), ImGuiCond_FirstUseEver);
@@ -62,12 +77,12 @@ void GuideInspectorView::draw() {
   bool secondary = secondarySeed_ >= 0;
   if (ImGui::Checkbox("secondary ray of the path with seed", &secondary)) {
     secondarySeed_ = secondary ? 1 : -1;
-    if (!busy()) request(desc_, x_, y_);
+    request(desc_, x_, y_);
   }
   if (secondary) {
     ImGui::SameLine();
     ImGui::SetNextItemWidth(90);
-    if (ImGui::InputInt("##seed", &secondarySeed_) && !busy()) {
+    if (ImGui::InputInt("##seed", &secondarySeed_)) {
       secondarySeed_ = std::max(0, secondarySeed_);
       request(desc_, x_, y_);
     }

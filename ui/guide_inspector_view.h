@@ -18,16 +18,21 @@ namespace candela {
 class GuideInspectorView {
  public:
   ~GuideInspectorView();
-  // Inspects pixel (x, y) of `desc` (the scene as edited now); a request in flight is superseded.
+  // Inspects pixel (x, y) of `desc` (the scene as edited now). While one runs, the newest request
+  // waits and starts when it finishes: the UI thread never waits for an inspection.
   void request(const SceneDesc& desc, int x, int y);
   // Draws the window while it is open.
   void draw();
   bool busy() const { return running_.load(); }
   // An inspection has finished (with a chart or an error).
   bool finished() const;
+  // The finished inspection in one line (inspectionSummary), or its error.
+  std::string summary() const;
 
  private:
   void join();
+  void start();
+  bool pending_ = false;
   std::thread worker_;
   std::atomic<bool> running_{false};
   mutable std::mutex mutex_;

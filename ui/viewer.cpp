@@ -286,7 +286,7 @@ class Viewer {
   int dragButton_ = -1;
   bool readoutLocked_ = false;
   GuideInspectorView inspector_;  // Ctrl+click on a pixel
-  bool inspectDone_ = false;
+  bool inspectDone_ = false, inspectReported_ = false;
   int lockedX_ = 0, lockedY_ = 0;
 
   uint64_t latencyRequest_ = 0;
@@ -1112,6 +1112,11 @@ void Viewer::scripted() {
     inspectDone_ = true;
   }
   if (inspectDone_ && !inspector_.finished()) return;  // a scripted screenshot shows the chart
+  if (inspectDone_ && !inspectReported_) {
+    std::printf("inspector: %s\n", inspector_.summary().c_str());
+    std::fflush(stdout);
+    inspectReported_ = true;
+  }
   if (!options_.screenshotPath.empty() && !screenshotDone_) {
     const bool ready = (options_.afterSpp > 0 && frame_->film.spp() >= options_.afterSpp) ||
                        (options_.afterSeconds > 0.0 && frame_->seconds >= options_.afterSeconds) ||
