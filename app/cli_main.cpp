@@ -6,6 +6,7 @@
 //   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
 #include "convergence.h"
 #include "guide_inspector.h"
+#include "input_limits.h"
 #include "procedural.h"
 #include "renderer.h"
 #include "scene.h"
@@ -15,6 +16,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -242,11 +244,26 @@ int main(int argc, char** argv) {
   int spp = 0, seed = -1, threads = 0, refSpp = 1024;
   double seconds = 0.0;
 
+  // A finite number > 0 (CLI::PositiveNumber lets NaN through).
+  const CLI::Validator finitePositive(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || !(v > 0.0)) return "expected a finite number > 0, got " + text;
+        return {};
+      },
+      "POSITIVE");
+  double maxMemoryGb = 0.0;
+  app.add_option("--max-memory", maxMemoryGb,
+                 "Memory budget in GB for any one input-sized structure (film, grid, probes); default 4 or CANDELA_MAX_MEMORY_GB")
+      ->check(finitePositive);
+  app.fallthrough();
+
   auto* r = app.add_subcommand("render", "Render a scene to an EXR (scene-linear) or PNG (sRGB) image");
   r->add_option("scene", scenePath, "Scene JSON file")->required()->check(CLI::ExistingFile);
   r->add_option("-o,--output", out, "Output image (.exr or .png)")->required();
   auto* sppOpt = r->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
-  r->add_option("--time", seconds, "Render for this many seconds instead")->check(CLI::PositiveNumber)->excludes(sppOpt);
+  r->add_option("--time", seconds, "Render for this many seconds instead")->check(finitePositive)->excludes(sppOpt);
   r->add_option("--seed", seed, "Random seed")->check(CLI::NonNegativeNumber);
   r->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
   r->add_option("--strategy", preset, "Strategy preset: " + [] {
@@ -299,6 +316,7 @@ int main(int argc, char** argv) {
   ins->add_option("-o,--output", out, "Output directory")->required();
 
   CLI11_PARSE(app, argc, argv);
+  if (maxMemoryGb > 0.0) setMemoryBudgetBytes(static_cast<size_t>(std::min(maxMemoryGb, 1e6) * 1073741824.0));
   try {
     if (rep->parsed()) return runReport(quick, out, threads);
     if (r->parsed()) return render(scenePath, out, spp, seconds, seed, threads, preset, sets);
@@ -322,8 +340,13 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "error: %s: out of memory (lower the resolution or grid sizes, or see --max-memory)\n",
+                 scenePath.empty() ? out.c_str() : scenePath.c_str());
+    return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
+    // Never a bare library message: name the input it came from.
+    std::fprintf(stderr, "error: %s: %s\n", scenePath.empty() ? out.c_str() : scenePath.c_str(), e.what());
     return 1;
   }
   return 0;

@@ -1,5 +1,7 @@
 #include "fields.h"
 
+#include "input_limits.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -9,7 +11,10 @@ namespace candela {
 namespace {
 std::string shortDump(const Json* j) {
   if (!j) return "nothing";
-  std::string s = j->dump();
+  // Containers are summarised, not dumped: a huge value must not make a huge message.
+  if (j->is_array() && j->size() > 8) return "an array of " + std::to_string(j->size()) + " elements";
+  if (j->is_object() && j->size() > 8) return "an object of " + std::to_string(j->size()) + " fields";
+  std::string s = j->dump(-1, ' ', false, Json::error_handler_t::replace);
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
 }
@@ -24,6 +29,8 @@ std::string rangeText(Range r) {
   return os.str();
 }
 }  // namespace
+
+std::string shortJson(const Json& value) { return shortDump(&value); }
 
 JsonReader::JsonReader(const Json& object, std::string file, std::string path)
     : object_(object), file_(std::move(file)), path_(std::move(path)) {}
@@ -125,8 +132,15 @@ void applySetting(Json& doc, const std::string& assignment, const std::string& o
     throw InputError(origin + ": '" + assignment + "': expected key=value, such as strategy.majorant.cell_size=16");
   const std::string key = assignment.substr(0, eq);
   const std::string text = assignment.substr(eq + 1);
+  if (jsonNestingDepth(text, limits::kMaxJsonDepth) > limits::kMaxJsonDepth)
+    throw InputError(origin + ": " + key + ": the value nests deeper than " + std::to_string(limits::kMaxJsonDepth) + " levels");
   Json value = Json::parse(text, nullptr, false);
-  if (value.is_discarded()) value = text;
+  if (value.is_discarded()) {
+    // Not JSON (a bare word, or a number past double such as 1e309): taken as a string, which
+    // must be UTF-8 to be written back to JSON and image metadata.
+    if (!isValidUtf8(text)) throw InputError(origin + ": " + key + ": expected valid UTF-8 text");
+    value = text;
+  }
 
   Json* node = &doc;
   std::string walked;

@@ -152,10 +152,13 @@ Json toJson(const S& s) {
   return j;
 }
 
+// A value for an error message: at most about 60 characters, large containers summarised.
+std::string shortJson(const Json& value);
+
 // Reads a struct whose current values are the defaults; `file` and `path` name the source in errors.
 template <class S>
 void fromJson(const Json& j, S& s, const std::string& file, const std::string& path) {
-  if (!j.is_object()) throw InputError(file + ": " + (path.empty() ? "(top level)" : path) + ": expected an object, got " + j.dump());
+  if (!j.is_object()) throw InputError(file + ": " + (path.empty() ? "(top level)" : path) + ": expected an object, got " + shortJson(j));
   JsonReader r(j, file, path);
   s.visit(r);
   r.finish();

@@ -83,8 +83,11 @@ float PathTracer::majorantOpticalDepth(const Ray& ray, float t0, float t1) const
 }
 
 float PathTracer::guidedWeight(float r) const {
-  switch (scene_.strategy().guiding.combination) {
+  const GuidingSettings& g = scene_.strategy().guiding;
+  switch (g.combination) {
     case GuideCombination::Balance: return 1.0f / (1.0f + r);
+    // One-sample MIS: p_g / (q p_g + (1 - q) p_t), the selection probability q included.
+    case GuideCombination::OneSample: return 1.0f / (g.guided_probability + (1.0f - g.guided_probability) * r);
     case GuideCombination::Power: return std::isfinite(r * r) ? 1.0f / (1.0f + r * r) : 0.0f;
     case GuideCombination::Average: return 0.5f;
     case GuideCombination::GuidedOnly: return 1.0f;
@@ -440,11 +443,18 @@ Rgb PathTracer::trace(PathState st, const PiecewiseLinearView* cameraGuide, Rng&
     // guided_vertex = direct (the continuation is the tracked technique's alone, unweighted), or
     // as its continuation's survival probability in path mode, where the guided vertex does
     // likewise so that a guided segment continues about one path on average instead of two.
+    // With one-sample MIS only one of the two vertices counts: the guided one with probability q.
     float trackedDirect = 1.0f, trackedContinue = 1.0f;
     if (guided) {
+      const GuidingSettings& gs = strategy.guiding;
+      const bool oneSample = gs.combination == GuideCombination::OneSample;
+      const bool guidedPicked = !oneSample || rng.uniform() < gs.guided_probability;
       if (walk.event == SegmentWalk::Event::Scattered) {
         const float pg = guide.pdf(walk.scatterT);
-        const float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(walk.nullProbability * walk.scatterDensity / pg) : 1.0f;
+        const float pt = walk.nullProbability * walk.scatterDensity;
+        float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(pt / pg) : 1.0f;
+        // p_t / (q p_g + (1 - q) p_t) when the tracked vertex was picked, else nothing.
+        if (oneSample) trackedWeight = guidedPicked ? 0.0f : pt / (gs.guided_probability * pg + (1.0f - gs.guided_probability) * pt);
         if (strategy.guiding.guided_vertex == GuidedVertex::Path) {
           st.beta *= trackedWeight;
           trackedContinue = trackedWeight;
@@ -452,7 +462,7 @@ Rgb PathTracer::trace(PathState st, const PiecewiseLinearView* cameraGuide, Rng&
           trackedDirect = trackedWeight;
         }
       }
-      L += guidedSample(segmentStart, guide, rng);
+      if (guidedPicked) L += guidedSample(segmentStart, guide, rng);
     }
     if (walk.event == SegmentWalk::Event::Absorbed) break;
 

@@ -48,7 +48,8 @@ class LightSampler {
   explicit LightSampler(const std::vector<float>& powers);
   bool empty() const { return cdf_.empty(); }
   int sample(float u, float& pmf) const;
-  float pmf(int index) const { return pmf_[static_cast<size_t>(index)]; }
+  // 0 for a light the sampler never picks (every light dark: the sampler is empty).
+  float pmf(int index) const { return static_cast<size_t>(index) < pmf_.size() ? pmf_[static_cast<size_t>(index)] : 0.0f; }
 
  private:
   std::vector<float> cdf_, pmf_;

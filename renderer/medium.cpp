@@ -72,7 +72,8 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   // float rounding in the trilinear lerp can never exceed maj(mu_t).
   const float scale = desc_.sigma_t_scale * policy.safety_factor * (1.0f + 4e-7f);
   const float emissionScale = policy.emission_weight * desc_.sigma_t_scale * (1.0f - albedoAverage_);
-  const float cap = policy.emission_cap > 0.0f ? policy.emission_cap / voxelSize_ : kInfinity;
+  // Capped even at c = 0: past about 1000 collisions per voxel a walk would not end (input_limits.h).
+  const float cap = (policy.emission_cap > 0.0f ? policy.emission_cap : 1000.0f) / voxelSize_;
   cellMajorant_.resize(majorant_.cellCount());
   for (size_t i = 0; i < cellMajorant_.size(); ++i) {
     float muBar = majorant_.maxDensities()[i] * scale;

@@ -1,6 +1,7 @@
 #include "probes.h"
 
 #include "integrator.h"
+#include "input_limits.h"
 #include "phase.h"
 #include "scene.h"
 
@@ -55,7 +56,14 @@ std::shared_ptr<const ProbeSet> ProbeSet::learn(const Scene& scene, const Guidin
   const Vec3 extent = hi - lo;
   set->spacing_ = settings.probe_spacing > 0.0f ? settings.probe_spacing : std::max({extent.x, extent.y, extent.z}) / 20.0f;
   set->radius_ = settings.probe_radius * set->spacing_;
-  const glm::ivec3 count = glm::max(glm::ivec3(glm::ceil(extent / set->spacing_)), glm::ivec3(1));
+  // The lattice is bounded before any allocation: a tiny spacing over a large volume would
+  // otherwise take minutes and gigabytes (input_limits.h).
+  const Vec3 cells = glm::ceil(extent / set->spacing_);
+  const double lattice = static_cast<double>(cells.x) * cells.y * cells.z;
+  if (!(lattice <= limits::kMaxProbes))
+    throw InputError(scene.desc().path + ": strategy.guiding.probe_spacing: " + std::to_string(set->spacing_) + " gives a lattice of " +
+                     std::to_string(lattice) + " probes over the volumes' extent; expected at most 4e6 (raise the spacing, or 0: automatic)");
+  const glm::ivec3 count = glm::max(glm::ivec3(cells), glm::ivec3(1));
   std::vector<Vec3> centers;
   for (int z = 0; z < count.z; ++z)
     for (int y = 0; y < count.y; ++y)
@@ -184,7 +192,8 @@ float ProbeSet::weight(size_t probe, const Vec3& wo, const Vec3& x) const {
 }
 
 void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, std::vector<DistanceKnot>& knots) const {
-  if (probes_.empty()) return;
+  // No lights (and no emission): no probe has a weight, and the guide is its uniform floor.
+  if (probes_.empty() || lights_.empty()) return;
   // A probe overlaps several cells; per-thread stamps keep one knot per probe in O(1).
   thread_local std::vector<uint32_t> stamps;
   thread_local uint32_t query = 0;

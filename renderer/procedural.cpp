@@ -1,5 +1,7 @@
 #include "procedural.h"
 
+#include "input_limits.h"
+
 #include "rng.h"
 
 #include <openvdb/openvdb.h>
@@ -147,6 +149,9 @@ void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path) {
   const float voxel = longest / static_cast<float>(gen.resolution);
   const glm::ivec3 dims = glm::max(glm::ivec3(glm::round(gen.size / voxel)), glm::ivec3(2));
   const size_t count = static_cast<size_t>(dims.x) * dims.y * dims.z;
+  // Dense density and temperature arrays, then about as much again for the VDB trees.
+  checkMemoryBudget(static_cast<double>(count) * 16.0, path, "generating a " + std::to_string(dims.x) + " x " + std::to_string(dims.y) + " x " +
+                                                             std::to_string(dims.z) + " \"" + gen.type + "\" volume (generator.resolution)");
   std::vector<float> density(count, 0.0f), temperature(count, 0.0f);
   const Noise noise(gen.seed);
   const bool hasTemperature = gen.type == "torch" || gen.type == "plume" || gen.temperature > 0.0f;

@@ -1,5 +1,6 @@
 #include "scene.h"
 
+#include "input_limits.h"
 #include "procedural.h"
 #include "vdb_io.h"
 
@@ -51,6 +52,38 @@ std::vector<LoadedGrid> loadGridsCached(const std::string& path, const std::vect
 
 }  // namespace
 
+// A medium the renderer can track (input_limits.h): finite world placement, voxels of a sane size,
+// and no voxel so dense that tracking steps vanish below float precision. Checked before majorants
+// (sized by the active box) are built.
+void checkRepresentable(const Medium& m, const std::string& where, const StrategySettings& strategy) {
+  const float voxel = m.voxelSize();
+  if (!(voxel >= limits::kMinVoxelSize && voxel <= limits::kMaxVoxelSize))
+    throw InputError(where + ".transform.scale: voxels end up " + std::to_string(voxel) +
+                     " world units wide (the VDB's voxel size times the scale); expected between 1e-6 and 1e6");
+  const Mat4& w = m.worldFromIndex();
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (!std::isfinite(w[i][j])) throw InputError(where + ".transform: the index-to-world transform is not finite");
+  const MajorantGrid& grid = m.majorantGrid();
+  if (grid.empty()) return;
+  Vec3 lo, hi;
+  m.worldBounds(lo, hi);
+  if (maxComponent(glm::max(glm::abs(lo), glm::abs(hi))) > 10.0 * limits::kMaxCoordinate)
+    throw InputError(where + ".transform: the volume reaches " + std::to_string(maxComponent(glm::max(glm::abs(lo), glm::abs(hi)))) +
+                     " world units from the origin; expected within 1e7");
+  float densest = 0.0f;
+  for (float d : grid.maxDensities()) densest = std::max(densest, d);
+  const double depth = static_cast<double>(densest) * m.sigmaTScale() * voxel;
+  if (!(depth <= limits::kMaxOpticalDepthPerVoxel))
+    throw InputError(where + ".sigma_t_scale: the densest voxel (" + std::to_string(densest) + " x sigma_t_scale " +
+                     std::to_string(m.sigmaTScale()) + ") has an optical depth of " + std::to_string(depth) +
+                     " per voxel; expected at most 1e4 (lower sigma_t_scale or the grid's values)");
+  // The majorant grid at the finest cell size the strategy may ask for.
+  const Vec3 extent = grid.cellExtent() * Vec3(grid.resolution());
+  const double cells = static_cast<double>(extent.x) * extent.y * extent.z / std::pow(std::max(1, strategy.majorant.cell_size), 3);
+  checkMemoryBudget(cells * 8.0, where, "the majorant grid at strategy.majorant.cell_size " + std::to_string(strategy.majorant.cell_size));
+}
+
 std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::string>* warnings,
                                     std::shared_ptr<const ProbeSet> servingProbes) {
   namespace fs = std::filesystem;
@@ -64,7 +97,11 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     std::string path;
     std::string density = v.density_grid, temperature = v.temperature_grid, emission = v.emission_grid;
     if (v.has_generator) {
-      path = cachedGeneratedVolume(v.generator);
+      try {
+        path = cachedGeneratedVolume(v.generator);
+      } catch (const InputError& e) {
+        throw InputError(desc.path + ": " + field + ".generator: " + e.what());
+      }
       density = "density";
       const bool hasTemperature = v.generator.type == "torch" || v.generator.type == "plume" || v.generator.temperature > 0.0f;
       temperature = hasTemperature ? "temperature" : "";
@@ -95,6 +132,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     if (v.emission.mode == EmissionMode::Blackbody) temperatureGrid = grids[1].grid;
     if (v.emission.mode == EmissionMode::Grid) emissionGrid = grids[1].grid;
     auto medium = std::make_unique<Medium>(v, grids[0].grid, temperatureGrid, emissionGrid);
+    checkRepresentable(*medium, desc.path + ": " + field, desc.strategy);
     if (medium->majorantGrid().empty() && warnings)
       warnings->push_back(path + ": " + field + ": grid \"" + density + "\" has no active voxels; the volume is empty");
     medium->setIndex(static_cast<int>(i));
@@ -128,6 +166,17 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
   }
   for (const auto& l : desc.lights) scene->lights_.emplace_back(l);
   scene->buildLightSampler();
+  // A light whose power float cannot hold would be dropped by the light sampler: an error instead.
+  for (size_t i = 0; i < scene->lights_.size(); ++i)
+    if (!std::isfinite(scene->lights_[i].power(scene->radius_)))
+      throw InputError(desc.path + ": lights." + std::to_string(i) + ".intensity: the light's power is not finite at this scene size");
+  for (size_t i = 0; i < scene->media_.size(); ++i)
+    if (const EmissionLight* e = scene->media_[i]->emissionLight(); e && !std::isfinite(e->power()))
+      throw InputError(desc.path + ": volumes." + std::to_string(i) + ".emission.intensity: the emitted power is not finite");
+  // The film and its per-pixel tables, before any of them is allocated.
+  const auto [width, height] = desc.camera.resolution;
+  checkMemoryBudget(static_cast<double>(width) * height * (desc.strategy.guiding.guide == DistanceGuide::None ? 64.0 : 320.0),
+                    desc.path + ": camera.resolution", "an image of " + std::to_string(width) + " x " + std::to_string(height));
   scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
   if (desc.strategy.guiding.guide == DistanceGuide::Probes) {
     if (servingProbes) {

@@ -3,12 +3,19 @@
 // "FILE: FIELD: expected ..., got ..." for anything wrong.
 #pragma once
 
+#include "input_limits.h"
 #include "settings.h"
 
 #include <string>
 #include <vector>
 
 namespace candela {
+
+// World positions: what float arithmetic (and Embree) can represent (input_limits.h).
+inline constexpr Range kCoordinate{-limits::kMaxCoordinate, limits::kMaxCoordinate};
+inline constexpr Range kLength{1e-5, limits::kMaxCoordinate};
+inline constexpr Range kRadianceScale{0.0, limits::kMaxRadiance};
+inline constexpr Range kColour{0.0, 1e6};
 
 struct CameraDesc {
   Vec3 position{0.0f, 1.0f, 5.0f};
@@ -19,9 +26,9 @@ struct CameraDesc {
 
   template <class V>
   void visit(V& v) {
-    v.required("position", position, "Camera position (world units)");
-    v.required("look_at", look_at, "Point the camera looks at");
-    v.field("up", up, "Up direction");
+    v.required("position", position, "Camera position (world units)", kCoordinate);
+    v.required("look_at", look_at, "Point the camera looks at", kCoordinate);
+    v.field("up", up, "Up direction (any length; not parallel to the view)", kCoordinate);
     v.field("fov_y", fov_y, "Vertical field of view in degrees", Range{0.1, 179.0});
     v.field("resolution", resolution, "Image width and height in pixels", Range{1, 16384});
   }
@@ -70,10 +77,10 @@ struct EmissionDesc {
   template <class V>
   void visit(V& v) {
     v.field("mode", mode, "none, blackbody (temperature grid) or grid (emission grid x color)");
-    v.field("intensity", intensity, "Multiplies the emitted radiance", kNonNegative);
-    v.field("temperature_scale", temperature_scale, "Kelvin per temperature-grid unit", kNonNegative);
+    v.field("intensity", intensity, "Multiplies the emitted radiance", kRadianceScale);
+    v.field("temperature_scale", temperature_scale, "Kelvin per temperature-grid unit", Range{0.0, 1e6});
     v.field("temperature_offset", temperature_offset, "Kelvin added after scaling", Range{-1e5, 1e5});
-    v.field("color", color, "Emission colour (grid mode)", kNonNegative);
+    v.field("color", color, "Emission colour (grid mode)", kColour);
   }
 };
 
@@ -84,8 +91,8 @@ struct TransformDesc {
 
   template <class V>
   void visit(V& v) {
-    v.field("translate", translate, "World translation");
-    v.field("rotate_deg", rotate_deg, "Rotation in degrees about X, then Y, then Z");
+    v.field("translate", translate, "World translation", kCoordinate);
+    v.field("rotate_deg", rotate_deg, "Rotation in degrees about X, then Y, then Z", Range{-36000.0, 36000.0});
     v.field("scale", scale, "Scale along each axis", Range{1e-6, 1e6});
   }
 };
@@ -152,13 +159,13 @@ struct LightDesc {
   template <class V>
   void visit(V& v) {
     v.required("type", type, "point, spot, directional, sphere or environment");
-    v.field("color", color, "Light colour (scene-linear)", kNonNegative);
-    v.field("intensity", intensity, "Multiplies the colour", kNonNegative);
+    v.field("color", color, "Light colour (scene-linear)", kColour);
+    v.field("intensity", intensity, "Multiplies the colour (intensity x colour at most 1e12)", kRadianceScale);
     if (type == LightType::Point || type == LightType::Spot || type == LightType::Sphere)
-      v.field("position", position, "Light position");
+      v.field("position", position, "Light position", kCoordinate);
     if (type == LightType::Spot || type == LightType::Directional)
-      v.field("direction", direction, "Spot: where it points; directional: where the light travels");
-    if (type == LightType::Sphere) v.field("radius", radius, "Sphere radius", Range{1e-5, 1e6});
+      v.field("direction", direction, "Spot: where it points; directional: where the light travels (any length)", kCoordinate);
+    if (type == LightType::Sphere) v.field("radius", radius, "Sphere radius", kLength);
     if (type == LightType::Spot) {
       v.field("cone_angle_deg", cone_angle_deg, "Half-angle of the cone in degrees", Range{0.1, 90.0});
       v.field("cone_falloff_deg", cone_falloff_deg, "Soft edge width in degrees", Range{0.0, 90.0});
@@ -196,18 +203,18 @@ struct SurfaceDesc {
     v.required("type", type, "plane, box, sphere or cylinder");
     v.field("albedo", albedo, "Diffuse reflectance", kUnit);
     if (type == SurfaceType::Plane) {
-      v.field("height", height, "Height of the ground plane");
-      v.field("size", size, "Half-width of the plane", kPositive);
+      v.field("height", height, "Height of the ground plane", kCoordinate);
+      v.field("size", size, "Half-width of the plane", kLength);
     }
     if (type == SurfaceType::Box) {
-      v.required("min", min, "Lower corner");
-      v.required("max", max, "Upper corner");
+      v.required("min", min, "Lower corner", kCoordinate);
+      v.required("max", max, "Upper corner", kCoordinate);
     }
     if (type == SurfaceType::Sphere || type == SurfaceType::Cylinder) {
-      v.required("center", center, type == SurfaceType::Sphere ? "Centre" : "Centre of the bottom cap");
-      v.required("radius", radius, "Radius", kPositive);
+      v.required("center", center, type == SurfaceType::Sphere ? "Centre" : "Centre of the bottom cap", kCoordinate);
+      v.required("radius", radius, "Radius", kLength);
     }
-    if (type == SurfaceType::Cylinder) v.required("length", length, "Height of the cylinder", kPositive);
+    if (type == SurfaceType::Cylinder) v.required("length", length, "Height of the cylinder", kLength);
   }
 };
 
@@ -227,7 +234,10 @@ struct SceneDesc {
 SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings = {}, const std::string& preset = "");
 SceneDesc parseSceneDesc(const Json& doc, const std::string& path);
 Json sceneToJson(const SceneDesc& scene);
-// The document a scene file holds after --set edits, before validation.
+// The document a scene file holds, before validation. Rejects what is not a regular file, files
+// over 64 MB and nesting deeper than limits::kMaxJsonDepth.
 Json readSceneJson(const std::string& path);
+// JSON text parsed with the same checks; errors name `origin`.
+Json parseJsonText(const std::string& text, const std::string& origin);
 
 }  // namespace candela

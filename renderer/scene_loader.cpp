@@ -1,5 +1,6 @@
 #include "scene_desc.h"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -12,7 +13,7 @@ std::vector<S> readList(const Json& doc, const char* key, const std::string& fil
   std::vector<S> out;
   if (!doc.contains(key)) return out;
   const Json& list = doc[key];
-  if (!list.is_array()) throw InputError(file + ": " + key + ": expected an array, got " + list.dump().substr(0, 60));
+  if (!list.is_array()) throw InputError(file + ": " + key + ": expected an array, got " + shortJson(list));
   for (size_t i = 0; i < list.size(); ++i) {
     S s;
     fromJson(list[i], s, file, std::string(key) + "." + std::to_string(i));
@@ -32,6 +33,19 @@ void checkVolume(const VolumeDesc& v, const std::string& file, const std::string
       throw InputError(file + ": " + path + ".generator.type: expected one of constant, ramp, torch, mist, cloud, plume, invalid, got \"" +
                        v.generator.type + "\"");
   }
+  if (v.has_generator) {
+    // Every axis needs at least 2 voxels at this resolution; a thinner axis would be padded to 2
+    // voxels and render far thicker than asked.
+    const Vec3& size = v.generator.size;
+    const float voxel = maxComponent(size) / static_cast<float>(v.generator.resolution);
+    for (int a = 0; a < 3; ++a)
+      if (size[a] < 2.0f * voxel)
+        throw InputError(file + ": " + path + ".generator.size: axis " + "xyz"[a] + " (" + std::to_string(size[a]) +
+                         ") gets fewer than 2 voxels at resolution " + std::to_string(v.generator.resolution) +
+                         " (voxel size " + std::to_string(voxel) + "); expected every axis at least 2 voxels thick");
+  }
+  if (v.emission.mode == EmissionMode::Grid && static_cast<double>(v.emission.intensity) * maxComponent(v.emission.color) > limits::kMaxRadiance)
+    throw InputError(file + ": " + path + ".emission.intensity: expected intensity x colour at most 1e12");
   if (v.emission.mode == EmissionMode::Blackbody && !v.has_generator && v.temperature_grid.empty())
     throw InputError(file + ": " + path + ".temperature_grid: expected a grid name, since emission.mode is \"blackbody\"");
   if (v.emission.mode == EmissionMode::Grid && !v.has_generator && v.emission_grid.empty())
@@ -41,14 +55,34 @@ void checkVolume(const VolumeDesc& v, const std::string& file, const std::string
 }  // namespace
 
 Json readSceneJson(const std::string& path) {
-  std::ifstream in(path);
+  namespace fs = std::filesystem;
+  // Only regular files: a directory, device (/dev/zero), pipe or socket would hang or eat memory.
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec) throw InputError(path + ": cannot open the scene file (" + ec.message() + ")");
+  if (!fs::is_regular_file(status))
+    throw InputError(path + ": expected a scene file (JSON), got " + (fs::is_directory(status) ? "a directory" : "a device, pipe or socket"));
+  const auto size = fs::file_size(path, ec);
+  if (ec) throw InputError(path + ": cannot read the scene file (" + ec.message() + ")");
+  if (size > limits::kMaxSceneFileBytes)
+    throw InputError(path + ": expected a scene file of at most 64 MB, got " + formatBytes(static_cast<double>(size)) +
+                     " (volumes belong in .vdb files)");
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the scene file");
   std::stringstream ss;
   ss << in.rdbuf();
+  return parseJsonText(ss.str(), path);
+}
+
+Json parseJsonText(const std::string& text, const std::string& origin) {
+  if (jsonNestingDepth(text, limits::kMaxJsonDepth) > limits::kMaxJsonDepth)
+    throw InputError(origin + ": arrays and objects nest deeper than " + std::to_string(limits::kMaxJsonDepth) +
+                     " levels; expected a scene file");
   try {
-    return Json::parse(ss.str());
-  } catch (const Json::parse_error& e) {
-    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
+    return Json::parse(text);
+  } catch (const Json::exception& e) {
+    // parse_error (syntax, invalid UTF-8) and out_of_range (numbers past double, such as 1e309).
+    throw InputError(origin + ": not valid JSON (" + std::string(e.what()) + ")");
   }
 }
 
@@ -76,6 +110,13 @@ SceneDesc parseSceneDesc(const Json& doc, const std::string& file) {
   for (size_t i = 0; i < scene.volumes.size(); ++i) checkVolume(scene.volumes[i], file, "volumes." + std::to_string(i));
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     const LightDesc& l = scene.lights[i];
+    const double radiance = static_cast<double>(l.intensity) * maxComponent(l.color);
+    if (radiance > limits::kMaxRadiance)
+      throw InputError(file + ": lights." + std::to_string(i) + ".intensity: expected intensity x colour at most 1e12, got " +
+                       std::to_string(radiance) + " (beyond what float arithmetic keeps finite)");
+  }
+  for (size_t i = 0; i < scene.lights.size(); ++i) {
+    const LightDesc& l = scene.lights[i];
     if (l.type == LightType::Spot && l.cone_falloff_deg > l.cone_angle_deg)
       throw InputError(file + ": lights." + std::to_string(i) + ".cone_falloff_deg: expected at most cone_angle_deg");
     if ((l.type == LightType::Spot || l.type == LightType::Directional) && glm::length(l.direction) < 1e-6f)
@@ -89,16 +130,27 @@ SceneDesc parseSceneDesc(const Json& doc, const std::string& file) {
   const CameraDesc& c = scene.camera;
   const Vec3 forward = c.look_at - c.position;
   if (glm::length(forward) < 1e-6f) throw InputError(file + ": camera.look_at: expected a point other than camera.position");
+  if (glm::length(c.up) < limits::kMinDirectionLength)
+    throw InputError(file + ": camera.up: expected a direction of length at least 1e-6, got " + std::to_string(glm::length(c.up)));
   if (glm::length(glm::cross(forward, c.up)) < 1e-6f * glm::length(forward) * glm::length(c.up))
     throw InputError(file + ": camera.up: expected a direction not parallel to the view direction");
   return scene;
 }
 
 SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings, const std::string& preset) {
-  Json doc = readSceneJson(path);
-  if (!preset.empty()) doc["strategy"] = Json{{"preset", preset}};
-  for (const auto& s : settings) applySetting(doc, s, path + " (--set " + s + ")");
-  return parseSceneDesc(doc, path);
+  try {
+    Json doc = readSceneJson(path);
+    if (!preset.empty()) doc["strategy"] = Json{{"preset", preset}};
+    for (const auto& s : settings) applySetting(doc, s, path + " (--set " + s.substr(0, 80) + (s.size() > 80 ? "..." : "") + ")");
+    return parseSceneDesc(doc, path);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw InputError(path + ": out of memory while reading the scene");
+  } catch (const std::exception& e) {
+    // Whatever a library throws still names the file.
+    throw InputError(path + ": " + e.what());
+  }
 }
 
 Json sceneToJson(const SceneDesc& scene) {

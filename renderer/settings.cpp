@@ -29,10 +29,10 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
 }
 
 StrategySettings strategyFromJson(const Json& j, const std::string& file, const std::string& path) {
-  if (!j.is_object()) throw InputError(file + ": " + path + ": expected an object, got " + j.dump());
+  if (!j.is_object()) throw InputError(file + ": " + path + ": expected an object, got " + shortJson(j));
   std::string preset = "conventional";
   if (j.contains("preset")) {
-    if (!j["preset"].is_string()) throw InputError(file + ": " + path + ".preset: expected a string, got " + j["preset"].dump());
+    if (!j["preset"].is_string()) throw InputError(file + ": " + path + ".preset: expected a string, got " + shortJson(j["preset"]));
     preset = j["preset"].get<std::string>();
   }
   StrategySettings s = strategyPreset(preset, file + ": " + path + ".preset");

@@ -40,7 +40,10 @@ struct MajorantPolicy {
     v.field("cell_size", cell_size, "Voxels per majorant cell along each axis (grid structure). Smaller is tighter but more DDA steps", Range{1, 4096});
     v.field("emission_term", emission_term, "Raise the majorant where emission is bright, so collisions (and emission gathering) concentrate there (talk 2.1)");
     v.field("emission_weight", emission_weight, "k: converts mu_a * lum(Le) into a collision rate; 0 turns the emission term off", Range{0.0, 1e9});
-    v.field("emission_cap", emission_cap, "c: the emission-driven rate is capped at c / voxel size (collisions per voxel); 0 = no cap", Range{0.0, 1e6});
+    v.field("emission_cap", emission_cap,
+            "c: the emission-driven rate is capped at c / voxel size (collisions per voxel); 0 = the renderer's largest cap, "
+            "1000 per voxel",
+            Range{0.0, 1000.0});
     v.field("safety_factor", safety_factor, "Multiplies every majorant; keep 1 unless lookups can exceed the stored maxima", Range{1.0, 100.0});
   }
 };
@@ -71,14 +74,19 @@ struct EnumNames<DistanceGuide> {
   }
 };
 
-enum class GuideCombination { Balance, Power, Average, GuidedOnly };
+// How the guided and the tracked scattering vertex of a guided segment combine (METHOD.md s.4).
+// one_sample: one technique per segment, the guided one with probability guided_probability, its
+// vertex weighted by the balance heuristic of the mixture (Veach's one-sample MIS): one NEE per
+// segment instead of one for each technique.
+enum class GuideCombination { Balance, Power, Average, GuidedOnly, OneSample };
 template <>
 struct EnumNames<GuideCombination> {
   static const std::vector<std::pair<GuideCombination, const char*>>& get() {
     static const std::vector<std::pair<GuideCombination, const char*>> v{{GuideCombination::Balance, "balance"},
                                                                         {GuideCombination::Power, "power"},
                                                                         {GuideCombination::Average, "average"},
-                                                                        {GuideCombination::GuidedOnly, "guided_only"}};
+                                                                        {GuideCombination::GuidedOnly, "guided_only"},
+                                                                        {GuideCombination::OneSample, "one_sample"}};
     return v;
   }
 };
@@ -100,6 +108,7 @@ struct EnumNames<GuidedVertex> {
 struct GuidingSettings {
   DistanceGuide guide = DistanceGuide::None;
   GuideCombination combination = GuideCombination::Balance;  // MIS heuristic, or MIS off
+  float guided_probability = 0.5f;  // one_sample: probability that a segment uses the guided vertex
   GuidedVertex guided_vertex = GuidedVertex::Direct;
   int guided_segments = 1;        // 1: camera rays; 2: also the rays leaving the first vertex
   float floor = 0.1f;             // uniform share of the piecewise-linear density (full support)
@@ -116,7 +125,11 @@ struct GuidingSettings {
   void visit(V& v) {
     v.field("guide", guide, "Guided distance sampler: none, probes (talk 2.2) or equiangular (Kulla and Fajardo 2012)");
     v.field("combination", combination,
-            "How the guided and tracked samples combine: balance or power heuristic MIS, average (MIS off), guided_only");
+            "How the guided and tracked samples combine: balance or power heuristic MIS (both vertices, two NEEs), average "
+            "(MIS off), guided_only, or one_sample (one vertex per segment, chosen at random, balance-weighted)");
+    v.field("guided_probability", guided_probability,
+            "one_sample only: the probability that a guided segment uses the guided vertex rather than the tracked one",
+            Range{0.01, 0.99});
     v.field("guided_vertex", guided_vertex,
             "direct: the guided vertex adds only its direct light and the tracked vertex continues the path; path: "
             "both vertices add direct light and a continuing path, weighted by MIS");
