@@ -79,6 +79,7 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples\n",
               scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
               paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()));
+  if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) std::fprintf(stderr, "warning: %s: %s\n", scenePath.c_str(), w.c_str());
   std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
   return 0;
 }

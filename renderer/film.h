@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 namespace candela {
@@ -21,6 +23,16 @@ class Film {
   int height() const { return height_; }
   int spp() const { return spp_; }                     // samples per pixel accumulated
   uint64_t rejectedSamples() const { return rejected_; }
+  // A warning when more than 1 in 10,000 samples were rejected (NaN, Inf or negative: the pixels
+  // there read darker than they are); empty otherwise. The CLI and the viewer show it.
+  std::string rejectedSamplesWarning() const {
+    const double total = static_cast<double>(spp_) * width_ * height_;
+    if (rejected_ == 0 || !(static_cast<double>(rejected_) > 1e-4 * total)) return {};
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%llu of %.0f samples (%.2g%%) were NaN, infinite or negative and were rejected: the image is darker than it should be",
+                  static_cast<unsigned long long>(rejected_), total, 100.0 * static_cast<double>(rejected_) / total);
+    return buf;
+  }
   // The largest single accepted sample (any channel): the firefly measure of the stability suite.
   float maxSample() const { return maxSample_; }
 

@@ -10,6 +10,7 @@ PACKAGES=(
   libopenexr-dev libpng-dev nlohmann-json3-dev libcli11-dev
   libglfw3-dev libimgui-dev libopencolorio-dev libgl1-mesa-dri
   libgtest-dev libbenchmark-dev xvfb xauth xdotool
+  clang libclang-rt-14-dev
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -900,6 +900,10 @@ void Viewer::drawStatusBar() {
                 frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
                 frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
                 session_.loading() ? " | loading..." : "");
+    if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) {
+      ImGui::SameLine();
+      ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "| WARNING: %s", w.c_str());
+    }
   } else if (compare_) {
     ImGui::Text("%s | equal-time comparison of %d strategies%s | UI %.0f fps", scenePath_.c_str(), paneCount(),
                 compFrame_ && !compFrame_->status.empty() ? (" | " + compFrame_->status).c_str() : "", fps);

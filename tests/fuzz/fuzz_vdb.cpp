@@ -1,0 +1,27 @@
+// libFuzzer target: the VDB loader (loadVdbGrids) on arbitrary bytes, asking for a density and a
+// temperature grid as a blackbody volume does. Any outcome but grids or an InputError is a finding.
+#include "vdb_io.h"
+
+#include "fields.h"
+
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  // OpenVDB reads files only: one scratch file per process.
+  static const std::string path = "/tmp/candela-fuzz-vdb-" + std::to_string(::getpid()) + ".vdb";
+  if (FILE* f = std::fopen(path.c_str(), "wb")) {
+    std::fwrite(data, 1, size, f);
+    std::fclose(f);
+  } else {
+    return 0;
+  }
+  try {
+    (void)candela::loadVdbGrids(path, {"density", "temperature"}, "volumes.0.file");
+  } catch (const candela::InputError&) {
+  }
+  return 0;
+}
