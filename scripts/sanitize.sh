@@ -14,7 +14,7 @@ cmake -S . -B $B -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER
 cmake --build $B -j2 --target candela-cli hostile_vdb fuzz_scene fuzz_vdb phase_test majorant_test closed_form_test \
   scene_errors_test render_test emission_test guiding_test
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0
-export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$ROOT/tests/sanitizers/ubsan.supp
 export LSAN_OPTIONS=suppressions=$ROOT/tests/sanitizers/lsan.supp:print_suppressions=0
 # Unit tests whose executables this build made (GUI, OCIO and session tests need the viewer's
 # libraries and are left to the main build).
