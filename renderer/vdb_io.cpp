@@ -8,6 +8,7 @@
 #include <nanovdb/util/OpenToNanoVDB.h>
 
 #include <cmath>
+#include <fstream>
 #include <filesystem>
 #include <mutex>
 
@@ -29,6 +30,105 @@ Mat4 toGlm(const openvdb::math::Mat4d& m) {
   return out;
 }
 
+// Reads the parts of a VDB file where OpenVDB trusts a length field (the header, the file's and
+// each grid's metadata, the grid descriptors) and checks every length and offset against the file
+// size before OpenVDB sees the file: a corrupt length would otherwise make OpenVDB build a
+// multi-gigabyte string or seek past the end (found by tests/fuzz/fuzz_vdb.cpp). Returns an
+// empty string when the structure is sound, else what is wrong.
+class VdbStructureCheck {
+ public:
+  explicit VdbStructureCheck(const std::string& path) : in_(path, std::ios::binary) {
+    in_.seekg(0, std::ios::end);
+    size_ = static_cast<uint64_t>(std::max<std::streamoff>(0, in_.tellg()));
+    in_.seekg(0);
+  }
+
+  std::string run() {
+    if (!in_) return "cannot read the file";
+    int64_t magic = 0;
+    uint32_t version = 0, libraryMajor = 0, libraryMinor = 0;
+    if (!read(magic) || magic != 0x56444220) return "not a VDB file (no VDB magic number at the start)";
+    if (!read(version)) return "truncated header";
+    if (version < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION)
+      return "written by an OpenVDB older than 3.0 (file format " + std::to_string(version) + "); re-save it with a current OpenVDB";
+    if (version > openvdb::OPENVDB_FILE_VERSION) return "file format " + std::to_string(version) + " is newer than this OpenVDB reads";
+    char hasGridOffsets = 0;
+    if (!read(libraryMajor) || !read(libraryMinor) || !read(hasGridOffsets) || !skip(36)) return "truncated header";
+    if (const std::string e = metaMap("file metadata"); !e.empty()) return e;
+    if (!hasGridOffsets) return {};  // grids stored back to back: OpenVDB reads them sequentially
+    int32_t gridCount = 0;
+    if (!read(gridCount) || gridCount < 0 || static_cast<uint64_t>(gridCount) > remaining() / 36)
+      return "corrupt grid count (" + std::to_string(gridCount) + ")";
+    for (int32_t g = 0; g < gridCount; ++g) {
+      std::string name, type, parent;
+      int64_t gridPos = 0, blockPos = 0, endPos = 0;
+      if (!string(name) || !string(type) || !string(parent)) return "corrupt descriptor of grid " + std::to_string(g);
+      if (!read(gridPos) || !read(blockPos) || !read(endPos)) return "truncated descriptor of grid " + std::to_string(g);
+      const auto inFile = [this](int64_t p) { return p >= 0 && static_cast<uint64_t>(p) <= size_; };
+      const int64_t here = static_cast<int64_t>(in_.tellg());
+      if (!inFile(gridPos) || !inFile(blockPos) || !inFile(endPos) || gridPos < here || blockPos < gridPos || endPos < blockPos)
+        return "grid \"" + printable(name) + "\" has offsets outside the file (is it truncated?)";
+      in_.seekg(gridPos);
+      uint32_t compression = 0;
+      if (!read(compression)) return "truncated grid \"" + printable(name) + "\"";
+      if (const std::string e = metaMap("metadata of grid \"" + printable(name) + "\""); !e.empty()) return e;
+      in_.seekg(endPos);
+    }
+    return {};
+  }
+
+ private:
+  template <class T>
+  bool read(T& v) {
+    if (remaining() < sizeof(T)) return false;
+    in_.read(reinterpret_cast<char*>(&v), sizeof(T));
+    return static_cast<bool>(in_);
+  }
+  bool skip(uint64_t n) {
+    if (remaining() < n) return false;
+    in_.seekg(static_cast<std::streamoff>(n), std::ios::cur);
+    return static_cast<bool>(in_);
+  }
+  bool string(std::string& out) {
+    uint32_t length = 0;
+    if (!read(length) || length > remaining() || length > 4096) return false;
+    out.resize(length);
+    in_.read(out.data(), length);
+    return static_cast<bool>(in_);
+  }
+  std::string metaMap(const std::string& what) {
+    int32_t count = 0;
+    if (!read(count) || count < 0 || static_cast<uint64_t>(count) > remaining() / 12) return "corrupt " + what + " (entry count)";
+    for (int32_t i = 0; i < count; ++i) {
+      std::string name, type;
+      uint32_t valueSize = 0;
+      if (!string(name) || !string(type) || !read(valueSize) || valueSize > remaining())
+        return "corrupt " + what + " (entry " + std::to_string(i) + ")";
+      if (type == "__delayedload" && valueSize >= 4) {
+        // Its value starts with a leaf count OpenVDB sizes two arrays by (9 bytes a leaf); every
+        // leaf stores at least its 64-byte value mask in the file, which bounds the count.
+        uint32_t leaves = 0;
+        if (!read(leaves) || leaves > size_ / 64) return "corrupt " + what + " (delayed-load leaf count " + std::to_string(leaves) + ")";
+        valueSize -= 4;
+      }
+      if (!skip(valueSize)) return "corrupt " + what + " (entry " + std::to_string(i) + ")";
+    }
+    return {};
+  }
+  uint64_t remaining() {
+    const std::streamoff p = in_.tellg();
+    return p < 0 || static_cast<uint64_t>(p) > size_ ? 0 : size_ - static_cast<uint64_t>(p);
+  }
+  static std::string printable(const std::string& s) {
+    std::string out;
+    for (char c : s.substr(0, 60)) out += (c >= 32 && c < 127) ? c : '?';
+    return out;
+  }
+
+  std::ifstream in_;
+  uint64_t size_ = 0;
+};
+
 }  // namespace
 
 std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<std::string>& gridNames,
@@ -41,6 +141,8 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
     throw InputError(path + ": " + field + ": the VDB file does not exist" + (ec && fs::exists(status) ? " (" + ec.message() + ")" : ""));
   if (!fs::is_regular_file(status))
     throw InputError(path + ": " + field + ": expected a VDB file, got " + (fs::is_directory(status) ? "a directory" : "a device, pipe or socket"));
+  if (const std::string problem = VdbStructureCheck(path).run(); !problem.empty())
+    throw InputError(path + ": " + field + ": cannot read the VDB file: " + problem + "; is it truncated or not a VDB?");
   openvdb::io::File file(path);
   try {
     file.open(false);

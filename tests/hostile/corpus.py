@@ -7,7 +7,8 @@ Outcomes:
   render  exit 0 and an image written
   clean   either of the above (bit-flipped files: some flips leave a valid file)
   usage   the command line is refused (CLI11), exit != 0, PATTERN in the message
-Anything else (a signal, exit 1 with an unnamed message, a timeout, the memory limit) fails.
+Anything else (a signal, exit 1 with an unnamed message, a timeout, the address-space limit, a
+peak RSS above --peak-mb) fails.
 
 Usage: corpus.py --cli CANDELA_CLI --hostile-vdb HOSTILE_VDB --scene SCENE.json --work DIR
                  [--filter SUBSTRING] [--timeout S] [--memory-gb G] [--list]
@@ -15,6 +16,7 @@ VDB files are made at run time: hostile_vdb writes the extreme ones, `candela-cl
 valid one, which is then truncated and bit-flipped.
 """
 import argparse
+import base64
 import json
 import os
 import random
@@ -271,6 +273,22 @@ def vdb_cases(work, cli, hostile):
             scene_for(vdb)
         cases.append(Case(f'vdb {kind}', expect, pattern, scene=vdb[:-4] + '.json', prepare=prep))
 
+    # Inputs found by the fuzzer (tests/fuzz/fuzz_vdb.cpp), kept as regressions. huge-metadata-string:
+    # a file-level metadata name length of 2 GB that OpenVDB allocated before failing (60 s, 4 GB).
+    found = {
+        'huge-metadata-string': 'IEJEVgAAAADgAAAACgAAAAAAAAABMWI4MTdlYzMtNWRmNC00YzkyLWE1NjItOGE4N2UxMmE5NSBCM2IAAAAAAgD2AAcAAABkZW5zaXR5'
+                                'EAAAAFRyZWVfZmxvYXRfNV80XzMAAAAAfAAAAAAAAERWAAAAAOAAAAAKAAAAAAAAAAExYjgxN2VjMwAWJwAAAAAALTVkZjQtNGM5'
+                                'Mi1hNTYyLThhODdlAEIoAAAAAAAABgAxMg==',
+    }
+    for kind, data in found.items():
+        vdb = os.path.join(vdir, f'fuzz-{kind}.vdb')
+
+        def prep(data=data, vdb=vdb):
+            os.makedirs(vdir, exist_ok=True)
+            open(vdb, 'wb').write(base64.b64decode(data))
+            scene_for(vdb)
+        cases.append(Case(f'vdb fuzz finding {kind}', 'error', r'corrupt', scene=vdb[:-4] + '.json', prepare=prep))
+
     # A valid generated VDB, truncated and bit-flipped.
     source = os.path.join(vdir, 'source.vdb')
 
@@ -361,6 +379,7 @@ def main():
     ap.add_argument('--filter', default='')
     ap.add_argument('--timeout', type=float, default=60.0)
     ap.add_argument('--memory-gb', type=float, default=6.0, help='address-space limit per case (0: none, e.g. under ASan)')
+    ap.add_argument('--peak-mb', type=int, default=2048, help='largest RSS any case may reach (MB)')
     ap.add_argument('--list', action='store_true')
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
@@ -374,10 +393,17 @@ def main():
     failures = 0
     total = time.time()
     slowest = (0.0, '')
+    # Peak RSS: the children's maximum only grows, so a case that raises it set a new peak.
+    peak = (resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, 'before the first case')
     for c in cases:
         if c.prepare:
             c.prepare()
         ok, what, seconds = run_case(c, args, args.scene)
+        rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        if rss > peak[0]:
+            peak = (rss, c.name[:60])
+            if ok and rss > args.peak_mb * 1024:
+                ok, what = False, f'{what} (peak RSS {rss // 1024} MB, above {args.peak_mb} MB)'
         slowest = max(slowest, (seconds, c.name[:60]))
         if not ok:
             failures += 1
@@ -385,7 +411,7 @@ def main():
         elif os.environ.get('CANDELA_VERBOSE'):
             print(f'ok   [{c.expect}] {c.name[:100]}: {what[:160]} ({seconds:.2f} s)')
     print(f'{len(cases) - failures} of {len(cases)} cases as expected in {time.time() - total:.0f} s '
-          f'(slowest {slowest[0]:.1f} s: {slowest[1]})')
+          f'(slowest {slowest[0]:.1f} s: {slowest[1]}; peak RSS {peak[0] // 1024} MB: {peak[1]})')
     return 1 if failures else 0
 
 
