@@ -38,10 +38,10 @@ TEST(Comparison, PanesGetEqualTimeAndTheirErrorFalls) {
   auto frame = waitUntilDone(session, 1.5);
   ASSERT_TRUE(frame);
   ASSERT_EQ(frame->panes.size(), 3u);
-  double lo = 1e9, hi = 0.0;
+  double lo = 1e9, hi = 0.0, hiStart = 0.0;
   for (const auto& p : frame->panes) {
     lo = std::min(lo, p.seconds);
-    hi = std::max(hi, p.seconds);
+    if (p.seconds > hi) hi = p.seconds, hiStart = p.seconds - p.lastSlice;
     ASSERT_TRUE(p.film);
     EXPECT_GT(p.film->spp(), 0);
     ASSERT_GE(p.series.size(), 3u) << p.label;
@@ -49,8 +49,9 @@ TEST(Comparison, PanesGetEqualTimeAndTheirErrorFalls) {
     EXPECT_LT(p.series.back().relmse, p.series.front().relmse) << p.label;
     EXPECT_GT(p.efficiency(), 0.0);
   }
-  // Equal time to within one slice (slices aim at 60 ms; the limit allows 10%).
-  EXPECT_LT((hi - lo) / hi, 0.10) << lo << " .. " << hi;
+  // Equal time to within one slice, as the scheduler guarantees on an idle or a busy machine: the
+  // pane with the most time had no more than the least when its last pass began.
+  EXPECT_LE(hiStart, lo + 1e-9) << lo << " .. " << hi << ", last pass began at " << hiStart;
   const std::string csv = comparisonCsv(*frame);
   EXPECT_NE(csv.find("pane,seconds,spp,mse,relmse,efficiency"), std::string::npos);
   EXPECT_NE(csv.find("\nfull,"), std::string::npos);

@@ -143,6 +143,7 @@ void ComparisonSession::workerLoop() {
     if (!pane.renderer->renderPass(pane.film, pane.passSpp, &cancel_)) continue;
     const double slice = std::chrono::duration<double>(Clock::now() - start).count();
     ps.seconds += slice;
+    ps.lastSlice = slice;
     // Slices of about 60 ms: short enough that the panes stay level, long enough to be efficient.
     if (slice < 0.03) pane.passSpp = std::min(pane.passSpp * 2, 1024);
     else if (slice > 0.12 && pane.passSpp > 1) pane.passSpp /= 2;

@@ -561,7 +561,7 @@ void Viewer::captureFigure() {
                   image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
     Json panes = Json::array();
     for (const auto& p : compFrame_->panes) {
-      Json j{{"label", p.label}, {"seconds", p.seconds}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
+      Json j{{"label", p.label}, {"seconds", p.seconds}, {"last_slice_seconds", p.lastSlice}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
       if (!p.series.empty()) j["relmse"] = p.series.back().relmse, j["mse"] = p.series.back().mse, j["efficiency"] = p.efficiency();
       if (p.agreementTested) j["agrees"] = p.agreement.agree;
       panes.push_back(j);
