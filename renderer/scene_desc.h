@@ -28,7 +28,7 @@ struct CameraDesc {
   void visit(V& v) {
     v.required("position", position, "Camera position (world units)", kCoordinate);
     v.required("look_at", look_at, "Point the camera looks at", kCoordinate);
-    v.field("up", up, "Up direction (any length; not parallel to the view)", kCoordinate);
+    v.field("up", up, "Up direction (normalised; any length from 1e-6 to 1e6 per component; not parallel to the view)", kCoordinate);
     v.field("fov_y", fov_y, "Vertical field of view in degrees", Range{0.1, 179.0});
     v.field("resolution", resolution, "Image width and height in pixels", Range{1, 16384});
   }
@@ -164,7 +164,7 @@ struct LightDesc {
     if (type == LightType::Point || type == LightType::Spot || type == LightType::Sphere)
       v.field("position", position, "Light position", kCoordinate);
     if (type == LightType::Spot || type == LightType::Directional)
-      v.field("direction", direction, "Spot: where it points; directional: where the light travels (any length)", kCoordinate);
+      v.field("direction", direction, "Spot: where it points; directional: where the light travels (normalised; any length up to 1e6 per component)", kCoordinate);
     if (type == LightType::Sphere) v.field("radius", radius, "Sphere radius", kLength);
     if (type == LightType::Spot) {
       v.field("cone_angle_deg", cone_angle_deg, "Half-angle of the cone in degrees", Range{0.1, 90.0});

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <filesystem>
 #include <mutex>
 
@@ -55,7 +56,8 @@ class VdbStructureCheck {
     char hasGridOffsets = 0;
     if (!read(libraryMajor) || !read(libraryMinor) || !read(hasGridOffsets) || !skip(36)) return "truncated header";
     if (const std::string e = metaMap("file metadata"); !e.empty()) return e;
-    if (!hasGridOffsets) return {};  // grids stored back to back: OpenVDB reads them sequentially
+    // Without offsets (a stream, not a file) OpenVDB reads whole grids before any can be checked.
+    if (!hasGridOffsets) return "written as a stream without grid offsets; re-save it as a .vdb file";
     int32_t gridCount = 0;
     if (!read(gridCount) || gridCount < 0 || static_cast<uint64_t>(gridCount) > remaining() / 36)
       return "corrupt grid count (" + std::to_string(gridCount) + ")";
@@ -72,10 +74,18 @@ class VdbStructureCheck {
       uint32_t compression = 0;
       if (!read(compression)) return "truncated grid \"" + printable(name) + "\"";
       if (const std::string e = metaMap("metadata of grid \"" + printable(name) + "\""); !e.empty()) return e;
+      const std::string baseType = type.substr(0, type.find("_HalfFloat"));
+      types[name] = baseType;
+      if (parent.empty()) {
+        if (const std::string e = transformAndRoot(printable(name), baseType, blockPos); !e.empty()) return e;
+      }
       in_.seekg(endPos);
     }
     return {};
   }
+
+  // Grid type of each grid, by unique name (the type OpenVDB would instantiate).
+  std::map<std::string, std::string> types;
 
  private:
   template <class T>
@@ -115,6 +125,32 @@ class VdbStructureCheck {
     }
     return {};
   }
+  // The transform (its map's type name, then fixed-size data) and, for float grids, the root
+  // node's tile and child counts, which OpenVDB allocates by: the topology lies between here and
+  // blockPos, and each tile takes 17 bytes there, each child at least 12 + 8192 (origin, masks).
+  std::string transformAndRoot(const std::string& name, const std::string& gridType, int64_t blockPos) {
+    std::string map;
+    if (!string(map)) return "corrupt transform of grid \"" + name + "\"";
+    static const std::map<std::string, uint64_t> mapBytes = {
+        {"AffineMap", 128},         {"UnitaryMap", 128},         {"ScaleMap", 120},
+        {"UniformScaleMap", 120},   {"TranslationMap", 24},      {"ScaleTranslateMap", 144},
+        {"UniformScaleTranslateMap", 144}};
+    if (map == "NonlinearFrustumMap") return "grid \"" + name + "\" has a non-linear (frustum) transform, expected a linear one";
+    const auto it = mapBytes.find(map);
+    if (it == mapBytes.end()) return "grid \"" + name + "\" has an unknown transform type \"" + printable(map) + "\"";
+    if (!skip(it->second)) return "truncated transform of grid \"" + name + "\"";
+    if (gridType != "Tree_float_5_4_3") return {};
+    int32_t bufferCount = 0;
+    float background = 0.0f;
+    uint32_t tiles = 0, children = 0;
+    if (!read(bufferCount) || !read(background) || !read(tiles) || !read(children)) return "truncated topology of grid \"" + name + "\"";
+    const int64_t here = static_cast<int64_t>(in_.tellg());
+    const double topology = static_cast<double>(blockPos - here);
+    if (17.0 * tiles + (12.0 + 8192.0) * children > topology)
+      return "corrupt topology of grid \"" + name + "\" (" + std::to_string(tiles) + " tiles and " + std::to_string(children) +
+             " children in " + std::to_string(blockPos - here) + " bytes)";
+    return {};
+  }
   uint64_t remaining() {
     const std::streamoff p = in_.tellg();
     return p < 0 || static_cast<uint64_t>(p) > size_ ? 0 : size_ - static_cast<uint64_t>(p);
@@ -141,7 +177,8 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
     throw InputError(path + ": " + field + ": the VDB file does not exist" + (ec && fs::exists(status) ? " (" + ec.message() + ")" : ""));
   if (!fs::is_regular_file(status))
     throw InputError(path + ": " + field + ": expected a VDB file, got " + (fs::is_directory(status) ? "a directory" : "a device, pipe or socket"));
-  if (const std::string problem = VdbStructureCheck(path).run(); !problem.empty())
+  VdbStructureCheck structure(path);
+  if (const std::string problem = structure.run(); !problem.empty())
     throw InputError(path + ": " + field + ": cannot read the VDB file: " + problem + "; is it truncated or not a VDB?");
   openvdb::io::File file(path);
   try {
@@ -157,6 +194,11 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
       file.close();
       throw InputError(path + ": " + field + ": expected a grid named \"" + name + "\", the file holds: " +
                        (present.empty() ? "no grids" : present));
+    }
+    // Only float grids are read at all (a wrong type is refused before OpenVDB allocates it).
+    if (const auto t = structure.types.find(name); t != structure.types.end() && t->second != "Tree_float_5_4_3") {
+      file.close();
+      throw InputError(path + ": " + field + ": grid \"" + name + "\" is of type " + t->second + ", expected float (Tree_float_5_4_3)");
     }
     openvdb::GridBase::Ptr base;
     try {
