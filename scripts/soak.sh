@@ -35,7 +35,7 @@ run() {
       3) xdotool mousemove $X $Y click $((4 + RANDOM % 2)) ;;
       4) xdotool mousemove $X $Y mousedown 3 mousemove $(((X + 50) % W)) $Y mouseup 3 ;;
       5) xdotool key --clearmodifiers $(echo "space Tab Escape Left Right Up Down 1 2 3 r f w c h plus minus BackSpace Return 0 5 9 period" | tr ' ' '\n' | shuf -n1 --random-source=<(yes $RANDOM)) ;;
-      6) xdotool mousemove $X $Y key --clearmodifiers ctrl+click 2>/dev/null || xdotool mousemove $X $Y click 1 ;;
+      6) xdotool mousemove $X $Y keydown ctrl click 1 keyup ctrl ;;  # the guide inspector
       7) xdotool type --delay 5 "$(echo '0 1 -1 1e30 nan 0.5 abc 99999 -0.001' | tr ' ' '\n' | shuf -n1 --random-source=<(yes $RANDOM))" ;;
     esac
     sleep 0.05
