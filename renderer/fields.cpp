@@ -90,7 +90,10 @@ void JsonReader::read(const char* key, uint32_t& v, Range r, bool req) {
 void JsonReader::read(const char* key, float& v, Range r, bool req) {
   const Json* j = take(key, req);
   if (!j) return;
-  if (!j->is_number() || !std::isfinite(j->get<double>()) || j->get<double>() < r.min || j->get<double>() > r.max)
+  // Compared as float: a UI slider at its bound writes the float nearest the bound (0.99f is
+  // 0.99000001 as a double), which must read back as in range.
+  if (!j->is_number() || !std::isfinite(j->get<double>()) || std::abs(j->get<double>()) > 3.0e38 ||
+      j->get<float>() < static_cast<float>(r.min) || j->get<float>() > static_cast<float>(r.max))
     fail(key, "a number" + rangeText(r), j);
   v = j->get<float>();
 }
@@ -106,7 +109,8 @@ void JsonReader::read(const char* key, Vec3& v, Range r, bool req) {
   const Json* j = take(key, req);
   if (!j) return;
   auto ok = [&](const Json& e) {
-    return e.is_number() && std::isfinite(e.get<double>()) && e.get<double>() >= r.min && e.get<double>() <= r.max;
+    return e.is_number() && std::isfinite(e.get<double>()) && std::abs(e.get<double>()) <= 3.0e38 &&
+           e.get<float>() >= static_cast<float>(r.min) && e.get<float>() <= static_cast<float>(r.max);
   };
   if (j->is_array() && j->size() == 3 && ok((*j)[0]) && ok((*j)[1]) && ok((*j)[2])) {
     v = Vec3((*j)[0].get<float>(), (*j)[1].get<float>(), (*j)[2].get<float>());

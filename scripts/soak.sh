@@ -12,6 +12,8 @@ OUT=build/soak
 mkdir -p $OUT
 export CANDELA_CACHE_DIR=${CANDELA_CACHE_DIR:-$PWD/build/test-cache}
 W=1500 H=820
+KEYS=(space Tab Escape Left Right Up Down 1 2 3 r f w c h plus minus BackSpace Return 0 5 9 period ctrl+z ctrl+shift+z)
+TYPED=(0 1 -1 1e30 nan 0.5 abc 99999 -0.001 1e-30 inf)
 run() {
   build/app/candela "$SCENE" >$OUT/viewer.log 2>&1 &
   VIEWER=$!
@@ -34,9 +36,9 @@ run() {
       2) xdotool mousemove $X $Y mousedown 1 mousemove $(((X + RANDOM % 200) % W)) $(((Y + RANDOM % 100) % H)) mouseup 1 ;;
       3) xdotool mousemove $X $Y click $((4 + RANDOM % 2)) ;;
       4) xdotool mousemove $X $Y mousedown 3 mousemove $(((X + 50) % W)) $Y mouseup 3 ;;
-      5) xdotool key --clearmodifiers $(echo "space Tab Escape Left Right Up Down 1 2 3 r f w c h plus minus BackSpace Return 0 5 9 period" | tr ' ' '\n' | shuf -n1 --random-source=<(yes $RANDOM)) ;;
+      5) xdotool key --clearmodifiers "${KEYS[RANDOM % ${#KEYS[@]}]}" ;;
       6) xdotool mousemove $X $Y keydown ctrl click 1 keyup ctrl ;;  # the guide inspector
-      7) xdotool type --delay 5 "$(echo '0 1 -1 1e30 nan 0.5 abc 99999 -0.001' | tr ' ' '\n' | shuf -n1 --random-source=<(yes $RANDOM))" ;;
+      7) xdotool type --delay 5 -- "${TYPED[RANDOM % ${#TYPED[@]}]}" ;;
     esac
     sleep 0.05
   done
@@ -54,6 +56,9 @@ run() {
   echo "messages (warnings, errors, rejected edits):"; grep -iE "warn|error|reject" $OUT/viewer.log | sort | uniq -c | sort -rn | head -20
   return $STATUS
 }
-export -f run
-export MINUTES SCENE OUT W H
-xvfb-run -a -s "-screen 0 ${W}x${H}x24" bash -c run
+# Under Xvfb, this script runs itself again with --inner (xvfb-run's /bin/sh drops exported functions).
+if [ "${3:-}" = "--inner" ]; then
+  run
+  exit $?
+fi
+xvfb-run -a -s "-screen 0 ${W}x${H}x24" bash "$0" "$MINUTES" "$SCENE" --inner

@@ -176,3 +176,28 @@ TEST_F(BrokenVdb, NanAndNegativeVoxelsAreSanitisedWithAWarning) {
 
 }  // namespace
 }  // namespace candela
+
+namespace candela {
+namespace {
+
+// A float field at its bound reads back in range: the viewer's sliders write the float nearest
+// the bound (0.99f is 0.99000001 as a double), found by the GUI soak (scripts/soak.sh).
+TEST(Fields, FloatAtItsBoundReadsBackInRange) {
+  GuidingSettings g;
+  g.guided_probability = 0.99f;
+  GuidingSettings back;
+  EXPECT_NO_THROW(fromJson(toJson(g), back, "session.json", "strategy.guiding"));
+  EXPECT_EQ(back.guided_probability, 0.99f);
+  VolumeDesc v;
+  v.g = 0.999f;
+  v.has_generator = true;
+  VolumeDesc vBack;
+  EXPECT_NO_THROW(fromJson(toJson(v), vBack, "session.json", "volumes.0"));
+  // Beyond the bound in float is still an error.
+  Json j = toJson(g);
+  j["guided_probability"] = 0.995;
+  EXPECT_THROW(fromJson(j, back, "session.json", "strategy.guiding"), InputError);
+}
+
+}  // namespace
+}  // namespace candela
