@@ -19,7 +19,12 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
     s.emission.light_sampling = true;
     // Talk s.2.2: plus probe-guided distance sampling with MIS (the talk's Fig. 1 right), or the
     // equi-angular baseline in the same MIS slot.
-    if (name == "full") s.guiding.guide = DistanceGuide::Probes;
+    if (name == "full") {
+      s.guiding.guide = DistanceGuide::Probes;
+      // One vertex per guided segment: measured ahead of two balance-weighted vertices at equal
+      // time on every report scene where guiding runs (README, "Scattering sampling").
+      s.guiding.combination = GuideCombination::OneSample;
+    }
     if (name == "equiangular") s.guiding.guide = DistanceGuide::EquiAngular;
     return s;
   }
