@@ -4,6 +4,7 @@
 //   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
 //                     [--sweep KEY=V1,V2,...]
 //   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
+#include "cli_checks.h"
 #include "convergence.h"
 #include "guide_inspector.h"
 #include "input_limits.h"
@@ -245,15 +246,7 @@ int main(int argc, char** argv) {
   int spp = 0, seed = -1, threads = 0, refSpp = 1024;
   double seconds = 0.0;
 
-  // A finite number > 0 (CLI::PositiveNumber lets NaN through).
-  const CLI::Validator finitePositive(
-      [](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double v = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || !(v > 0.0)) return "expected a finite number > 0, got " + text;
-        return {};
-      },
-      "POSITIVE");
+  const CLI::Validator finitePositive = candela::finitePositive();
   double maxMemoryGb = 0.0;
   app.add_option("--max-memory", maxMemoryGb,
                  "Memory budget in GB for any one input-sized structure (film, grid, probes); default 4 or CANDELA_MAX_MEMORY_GB")

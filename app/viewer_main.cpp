@@ -3,12 +3,16 @@
 //           [--screenshot OUT.png (--after SECONDS | --after-spp N)] [--quit]
 //           [--measure-latency N] [--edit key=value ...]
 //           [--panes P1,P2,... [--equal-time SECONDS] [--figure OUT.png] [--reference REF.exr | --reference-spp N]]
+#include "cli_checks.h"
+#include "input_limits.h"
 #include "settings.h"
 #include "viewer.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 
 int main(int argc, char** argv) {
@@ -23,9 +27,9 @@ int main(int argc, char** argv) {
   app.add_option("--threads", o.threads, "Render threads (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--size", o.windowWidth, "Window width in pixels")->check(CLI::Range(320, 8192));
   app.add_option("--screenshot", o.screenshotPath, "Write a screenshot (PNG as displayed + scene-linear EXR) to this path");
-  auto after = app.add_option("--after", o.afterSeconds, "Screenshot after this many seconds of rendering")->check(CLI::PositiveNumber);
+  auto after = app.add_option("--after", o.afterSeconds, "Screenshot after this many seconds of rendering")->check(candela::finitePositive());
   app.add_option("--after-spp", o.afterSpp, "Screenshot at exactly this many samples per pixel (also stops there)")
-      ->check(CLI::PositiveNumber)
+      ->check(candela::finitePositive())
       ->excludes(after);
   app.add_flag("--quit", o.quit, "Quit after the screenshot (or at once when there is none)");
   app.add_option("--measure-latency", o.measureEdits, "Make N scripted edits and print edit-to-first-image latency and UI fps")
@@ -36,15 +40,20 @@ int main(int argc, char** argv) {
   app.add_option("--edit", o.editsAfterStart, "Apply a key=value edit once the first image is shown (as if typed in the panel)");
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
-  app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(CLI::PositiveNumber);
+  app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(candela::finitePositive());
   app.add_option("--figure", o.figurePath, "Write the comparison figure (PNG, one EXR per pane, CSV) once --equal-time is reached");
   app.add_option("--reference", o.referencePath, "Reference EXR for the panes' error series");
-  app.add_option("--reference-spp", o.referenceSpp, "Else render a reference at this spp (cached on disk)")->check(CLI::PositiveNumber);
+  app.add_option("--reference-spp", o.referenceSpp, "Else render a reference at this spp (cached on disk)")->check(candela::finitePositive());
   app.add_option("--reference-strategy", o.referenceStrategy, "Strategy preset of the rendered reference (default emission)");
   app.add_flag("--wipe", o.wipe, "With two panes: show them in one frame split by a draggable divider");
   app.add_option("--pane-view", o.paneView, "What the panes show: image, absolute or relative (error against the reference)")
       ->check(CLI::IsMember({"image", "absolute", "relative"}));
+  double maxMemoryGb = 0.0;
+  app.add_option("--max-memory", maxMemoryGb,
+                 "Memory budget in GB for any one input-sized structure (film, grid, probes); default 4 or CANDELA_MAX_MEMORY_GB")
+      ->check(candela::finitePositive());
   CLI11_PARSE(app, argc, argv);
+  if (maxMemoryGb > 0.0) candela::setMemoryBudgetBytes(static_cast<size_t>(maxMemoryGb * 1073741824.0));
   for (size_t start = 0; start < panes.size();) {
     const size_t comma = std::min(panes.find(',', start), panes.size());
     if (comma > start) o.panes.push_back(panes.substr(start, comma - start));
