@@ -1,5 +1,5 @@
 // candela-cli: batch rendering, equal-time benchmarking and volume generation.
-//   candela-cli render SCENE.json -o OUT.exr|OUT.png [--spp N | --time S] [--seed N] [--threads N]
+//   candela-cli render SCENE.json|VOLUME.vdb -o OUT.exr|OUT.png [--spp N | --time S] [--seed N] [--threads N] [--up auto|y|z]
 //                      [--strategy PRESET] [--set key=value ...]
 //   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
 //                     [--sweep KEY=V1,V2,...]
@@ -11,6 +11,7 @@
 #include "procedural.h"
 #include "renderer.h"
 #include "scene.h"
+#include "vdb_import.h"
 
 #include "report.h"
 
@@ -53,10 +54,12 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
 }
 
 int render(const std::string& scenePath, const std::string& out, int spp, double seconds, int seed, int threads,
-           const std::string& preset, const std::vector<std::string>& sets) {
+           const std::string& preset, const std::vector<std::string>& sets, const VdbImportOptions& import) {
   std::vector<std::string> all = sets;
   if (seed >= 0) all.insert(all.begin(), "render.seed=" + std::to_string(seed));
-  SceneDesc desc = sceneWith(scenePath, preset, all);
+  VdbImportReport imported;
+  SceneDesc desc = loadSceneOrVdb(scenePath, all, preset, import, &imported);
+  if (isVdbPath(scenePath)) std::printf("%s: opened as a volume: %s\n", scenePath.c_str(), imported.summary().c_str());
   if (spp > 0) desc.render.spp = spp;
   if (seconds > 0.0) desc.render.time_s = static_cast<float>(seconds);
   else if (spp > 0) desc.render.time_s = 0.0f;
@@ -66,16 +69,23 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
   Film film;
   const double t = renderer.renderBudget(film, desc.render.spp, desc.render.time_s, desc.render.time_s > 0 ? 1 : 4);
-  Image image;
-  image.width = film.width();
-  image.height = film.height();
-  image.rgb = film.meanImage();
+  Image image = film.image();  // with variance and spp layers in the EXR
   image.metadata["scene"] = scenePath;
   image.metadata["settings"] = sceneToJson(desc).dump();
   image.metadata["spp"] = std::to_string(film.spp());
   image.metadata["seconds"] = std::to_string(t);
   image.metadata["rejected_samples"] = std::to_string(film.rejectedSamples());
-  writeImage(out, image);
+  // A PNG is display-referred: the scene's exposure, or for an opened VDB one that shows the volume.
+  float exposure = desc.display.exposure;
+  if (isVdbPath(scenePath)) exposure = autoExposureStops(image.rgb);
+  image.metadata["exposure"] = std::to_string(exposure);
+  const std::filesystem::path parent = std::filesystem::path(out).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent);
+  if (isVdbPath(out)) throw InputError(out + ": expected an output image (.exr or .png), got a .vdb (the input would be overwritten?)");
+  if (std::filesystem::path(out).extension() == ".png")
+    writePng(out, image, exposure);
+  else
+    writeImage(out, image);
   const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
   std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples\n",
               scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
@@ -242,6 +252,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   std::string scenePath, out, preset, refPath, strategies, times, refStrategy = "conventional";
+  std::string upAxis = "auto";
+  VdbImportOptions importOptions;
   std::vector<std::string> sets;
   int spp = 0, seed = -1, threads = 0, refSpp = 1024;
   double seconds = 0.0;
@@ -254,7 +266,11 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   auto* r = app.add_subcommand("render", "Render a scene to an EXR (scene-linear) or PNG (sRGB) image");
-  r->add_option("scene", scenePath, "Scene JSON file")->required()->check(CLI::ExistingFile);
+  r->add_option("scene", scenePath, "Scene JSON file, or a .vdb to open as a volume (grids recognised by name, framed, lit by a sun and sky)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  r->add_option("--up", upAxis, "For a .vdb: its up axis, auto (Z when Blender wrote it), y or z")->check(CLI::IsMember({"auto", "y", "z"}));
+  r->add_flag("!--no-light-rig", importOptions.light_rig, "For a .vdb: no default sun and sky");
   r->add_option("-o,--output", out, "Output image (.exr or .png)")->required();
   auto* sppOpt = r->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
   r->add_option("--time", seconds, "Render for this many seconds instead")->check(finitePositive)->excludes(sppOpt);
@@ -313,7 +329,10 @@ int main(int argc, char** argv) {
   if (maxMemoryGb > 0.0) setMemoryBudgetBytes(static_cast<size_t>(std::min(maxMemoryGb, 1e6) * 1073741824.0));
   try {
     if (rep->parsed()) return runReport(quick, out, threads);
-    if (r->parsed()) return render(scenePath, out, spp, seconds, seed, threads, preset, sets);
+    if (r->parsed()) {
+      importOptions.up = upAxis == "z" ? UpAxis::Z : upAxis == "y" ? UpAxis::Y : UpAxis::Auto;
+      return render(scenePath, out, spp, seconds, seed, threads, preset, sets, importOptions);
+    }
     if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets, sweep);
     if (ins->parsed()) return inspect(scenePath, pixel, secondarySeed, lightSamples, preset, sets, out);
     if (g->parsed()) {

@@ -105,6 +105,8 @@ std::vector<float> errorFalseColour(const std::vector<float>& image, const std::
 std::string sceneContentHash(const SceneDesc& scene, const std::string& extra) {
   Json doc = sceneToJson(scene);
   doc.erase("strategy");
+  doc.erase("display");  // how it is shown, not what is rendered
+  doc.erase("description");
   doc["render"].erase("spp");
   doc["render"].erase("time_s");
   const std::string text = doc.dump() + "|" + extra;

@@ -24,6 +24,25 @@ Rgb Film::mean(int x, int y) const {
   return Rgb(sum_[i], sum_[i + 1], sum_[i + 2]) / static_cast<float>(spp_);
 }
 
+Image Film::image() const {
+  Image out;
+  out.width = width_;
+  out.height = height_;
+  out.rgb = meanImage();
+  const size_t pixels = static_cast<size_t>(width_) * height_;
+  out.channels["spp"].assign(pixels, static_cast<float>(spp_));
+  if (spp_ >= 2) {
+    const char* names[3] = {"variance.R", "variance.G", "variance.B"};
+    for (int c = 0; c < 3; ++c) out.channels[names[c]].resize(pixels);
+    for (int y = 0; y < height_; ++y)
+      for (int x = 0; x < width_; ++x) {
+        const Rgb se = standardError(x, y);
+        for (int c = 0; c < 3; ++c) out.channels[names[c]][static_cast<size_t>(y) * width_ + x] = se[c] * se[c];
+      }
+  }
+  return out;
+}
+
 Rgb Film::standardError(int x, int y) const {
   if (spp_ < 2) return Rgb(kInfinity);
   const size_t i = 3 * (static_cast<size_t>(y) * width_ + x);

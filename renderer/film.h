@@ -3,6 +3,8 @@
 // counted; they contribute zero but still count as samples, so the estimate stays normalised.
 #pragma once
 
+#include "image_io.h"
+
 #include "core.h"
 
 #include <algorithm>
@@ -41,6 +43,9 @@ class Film {
   Rgb standardError(int x, int y) const;
   // The whole image as interleaved RGB means.
   std::vector<float> meanImage() const;
+  // The mean as an Image with the layers a compositor expects: "variance.R/G/B" (the variance of each
+  // pixel's mean, the squared standard error; from 2 spp) and "spp".
+  Image image() const;
 
   const std::vector<float>& sum() const { return sum_; }
   const std::vector<float>& sumSquares() const { return sumSq_; }

@@ -31,11 +31,19 @@ void writeExr(const std::string& path, const Image& image) {
     for (const auto& [k, v] : image.metadata) header.insert("candela/" + k, Imf::StringAttribute(v));
     const char* names[3] = {"R", "G", "B"};
     for (const char* n : names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
+    const size_t pixels = static_cast<size_t>(image.width) * image.height;
+    for (const auto& [name, values] : image.channels) {
+      if (values.size() != pixels) throw std::runtime_error("channel " + name + " has " + std::to_string(values.size()) + " values, expected one per pixel");
+      header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    }
     Imf::OutputFile file(path.c_str(), header);
     Imf::FrameBuffer fb;
     const size_t xs = 3 * sizeof(float), ys = xs * static_cast<size_t>(image.width);
     for (int c = 0; c < 3; ++c)
       fb.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(image.rgb.data()) + c), xs, ys));
+    for (const auto& [name, values] : image.channels)
+      fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(values.data())), sizeof(float),
+                                 sizeof(float) * static_cast<size_t>(image.width)));
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
   } catch (const std::exception& e) {
@@ -56,6 +64,17 @@ Image readExr(const std::string& path) {
     const char* names[3] = {"R", "G", "B"};
     char* base = reinterpret_cast<char*>(image.rgb.data()) - (dw.min.x * xs + dw.min.y * ys);
     for (int c = 0; c < 3; ++c) fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, 0.0));
+    // Every further float channel (variance, spp) comes back too.
+    const size_t pixels = static_cast<size_t>(image.width) * image.height;
+    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+      const std::string name = it.name();
+      if (name == "R" || name == "G" || name == "B") continue;
+      image.channels[name].assign(pixels, 0.0f);
+    }
+    for (auto& [name, values] : image.channels) {
+      const size_t cxs = sizeof(float), cys = cxs * static_cast<size_t>(image.width);
+      fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()) - (dw.min.x * cxs + dw.min.y * cys), cxs, cys, 1, 1, 0.0));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     for (auto it = file.header().begin(); it != file.header().end(); ++it) {
@@ -147,6 +166,23 @@ void writePng(const std::string& path, const Image& image, float exposureStops) 
   for (size_t i = 0; i < image.rgb.size(); ++i)
     display.rgb8[i] = static_cast<uint8_t>(std::lround(255.0f * srgbEncode(image.rgb[i] * gain)));
   writeDisplayPng(path, display);
+}
+
+float autoExposureStops(const std::vector<float>& rgb) {
+  float peak = 0.0f;
+  std::vector<float> lum;
+  lum.reserve(rgb.size() / 3);
+  for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const float l = 0.2126f * rgb[i] + 0.7152f * rgb[i + 1] + 0.0722f * rgb[i + 2];
+    if (std::isfinite(l)) lum.push_back(l), peak = std::max(peak, l);
+  }
+  if (!(peak > 0.0f)) return 0.0f;
+  double sumLog = 0.0;
+  size_t n = 0;
+  for (float l : lum)
+    if (l > peak * 1e-6f) sumLog += std::log(static_cast<double>(l)), ++n;
+  const double key = std::exp(sumLog / static_cast<double>(std::max<size_t>(1, n)));
+  return std::clamp(static_cast<float>(std::log2(0.18 / key)), -16.0f, 16.0f);
 }
 
 void writeImage(const std::string& path, const Image& image) {

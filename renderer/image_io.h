@@ -13,6 +13,9 @@ struct Image {
   int width = 0, height = 0;
   std::vector<float> rgb;  // interleaved, scene-linear
   std::map<std::string, std::string> metadata;
+  // Further per-pixel float channels written to the EXR beside R, G, B, by their EXR names
+  // ("variance.R", "spp": a compositor shows "variance" as a layer). One value per pixel each.
+  std::map<std::string, std::vector<float>> channels;
 };
 
 // An 8-bit display-referred image (what a display transform produced), as the viewer's screenshots hold.
@@ -33,5 +36,10 @@ DisplayImage readDisplayPng(const std::string& path);
 void writeImage(const std::string& path, const Image& image);
 
 float srgbEncode(float linear);
+
+// Exposure in stops that brings the image's log-average luminance to middle grey (0.18), over the
+// pixels brighter than a millionth of the brightest (a black background does not drag it up);
+// clamped to +-16 stops. 0 for an all-black image.
+float autoExposureStops(const std::vector<float>& rgb);
 
 }  // namespace candela

@@ -3,6 +3,7 @@
 // "FILE: FIELD: expected ..., got ..." for anything wrong.
 #pragma once
 
+#include "display_settings.h"
 #include "input_limits.h"
 #include "settings.h"
 
@@ -219,8 +220,10 @@ struct SurfaceDesc {
 };
 
 struct SceneDesc {
-  std::string path;  // the file it came from ("" when built in code)
+  std::string path;  // the file it came from ("" when built in code); relative volume paths resolve against it
+  std::string description;
   CameraDesc camera;
+  DisplaySettings display;  // how the look was seen (the renderer ignores it; the viewer and PNGs use it)
   RenderSettings render;
   StrategySettings strategy;
   std::vector<VolumeDesc> volumes;
@@ -234,6 +237,10 @@ struct SceneDesc {
 SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>& settings = {}, const std::string& preset = "");
 SceneDesc parseSceneDesc(const Json& doc, const std::string& path);
 Json sceneToJson(const SceneDesc& scene);
+// Writes `scene` to `path` as a scene file (pretty JSON, written to a temporary file and renamed, so
+// a failed save never truncates the old file). Relative volume paths are rewritten to stay correct
+// from the new location; absolute ones are kept. Returns the scene as saved (path = `path`).
+SceneDesc saveSceneDesc(const SceneDesc& scene, const std::string& path);
 // The document a scene file holds, before validation. Rejects what is not a regular file, files
 // over 64 MB and nesting deeper than limits::kMaxJsonDepth.
 Json readSceneJson(const std::string& path);

@@ -1,5 +1,7 @@
 #include "scene_desc.h"
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -88,18 +90,20 @@ Json parseJsonText(const std::string& text, const std::string& origin) {
 
 SceneDesc parseSceneDesc(const Json& doc, const std::string& file) {
   if (!doc.is_object()) throw InputError(file + ": (top level): expected an object");
-  static const char* known[] = {"camera", "render", "strategy", "volumes", "lights", "surfaces", "description"};
+  static const char* known[] = {"camera", "render", "strategy", "volumes", "lights", "surfaces", "display", "description"};
   for (auto it = doc.begin(); it != doc.end(); ++it) {
     bool ok = false;
     for (const char* k : known) ok |= it.key() == k;
     if (!ok)
       throw InputError(file + ": " + it.key() +
-                       ": unknown field (expected one of: camera, render, strategy, volumes, lights, surfaces, description)");
+                       ": unknown field (expected one of: camera, render, strategy, volumes, lights, surfaces, display, description)");
   }
   if (doc.contains("description") && !doc["description"].is_string())
     throw InputError(file + ": description: expected a string");
   SceneDesc scene;
   scene.path = file;
+  if (doc.contains("description")) scene.description = doc["description"].get<std::string>();
+  if (doc.contains("display")) fromJson(doc["display"], scene.display, file, "display");
   if (!doc.contains("camera")) throw InputError(file + ": camera: required field is missing");
   fromJson(doc["camera"], scene.camera, file, "camera");
   if (doc.contains("render")) fromJson(doc["render"], scene.render, file, "render");
@@ -155,7 +159,9 @@ SceneDesc loadSceneDesc(const std::string& path, const std::vector<std::string>&
 
 Json sceneToJson(const SceneDesc& scene) {
   Json doc = Json::object();
+  if (!scene.description.empty()) doc["description"] = scene.description;
   doc["camera"] = toJson(scene.camera);
+  doc["display"] = toJson(scene.display);
   doc["render"] = toJson(scene.render);
   doc["strategy"] = toJson(scene.strategy);
   doc["volumes"] = Json::array();
@@ -165,6 +171,35 @@ Json sceneToJson(const SceneDesc& scene) {
   doc["surfaces"] = Json::array();
   for (const auto& s : scene.surfaces) doc["surfaces"].push_back(toJson(s));
   return doc;
+}
+
+SceneDesc saveSceneDesc(const SceneDesc& scene, const std::string& path) {
+  namespace fs = std::filesystem;
+  SceneDesc saved = scene;
+  saved.path = path;
+  const fs::path oldBase = fs::absolute(fs::path(scene.path).parent_path());
+  const fs::path newBase = fs::absolute(fs::path(path).parent_path());
+  for (auto& v : saved.volumes) {
+    if (v.file.empty() || fs::path(v.file).is_absolute()) continue;
+    const fs::path target = (oldBase / v.file).lexically_normal();
+    const fs::path relative = target.lexically_relative(newBase.lexically_normal());
+    v.file = relative.empty() ? target.string() : relative.string();
+  }
+  const fs::path tmp = fs::path(path + ".saving");
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path + ": cannot write the scene file (" + std::string(std::strerror(errno)) + ")");
+    out << sceneToJson(saved).dump(2) << "\n";
+    out.flush();
+    if (!out) throw InputError(path + ": cannot write the scene file (disk full?)");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw InputError(path + ": cannot replace the scene file (" + ec.message() + ")");
+  }
+  return saved;
 }
 
 }  // namespace candela

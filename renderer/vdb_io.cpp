@@ -7,6 +7,7 @@
 #include <openvdb/openvdb.h>
 #include <nanovdb/util/OpenToNanoVDB.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -261,6 +262,91 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
   }
   file.close();
   return out;
+}
+
+
+namespace {
+
+// Opens a VDB file after the same existence and structure checks as loadVdbGrids.
+void openChecked(openvdb::io::File& file, const std::string& path, const std::string& field, VdbStructureCheck& structure) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) throw InputError(path + ": " + field + ": the VDB file does not exist");
+  if (!fs::is_regular_file(status))
+    throw InputError(path + ": " + field + ": expected a VDB file, got " + (fs::is_directory(status) ? "a directory" : "a device, pipe or socket"));
+  if (const std::string problem = structure.run(); !problem.empty())
+    throw InputError(path + ": " + field + ": cannot read the VDB file: " + problem + "; is it truncated or not a VDB?");
+  try {
+    file.open(false);
+  } catch (const std::exception& e) {
+    throw InputError(path + ": " + field + ": cannot read the VDB file (" + e.what() + "); is it truncated or not a VDB?");
+  }
+}
+
+void collectMetadata(const openvdb::MetaMap& meta, std::vector<std::string>& out) {
+  for (auto it = meta.beginMeta(); it != meta.endMeta(); ++it) {
+    out.push_back(it->first);
+    if (it->second && it->second->typeName() == "string") out.push_back(it->first + "=" + it->second->str());
+  }
+}
+
+}  // namespace
+
+VdbFileInfo describeVdbFile(const std::string& path, const std::vector<std::string>& measure) {
+  initOpenVdb();
+  VdbStructureCheck structure(path);
+  openvdb::io::File file(path);
+  openChecked(file, path, "file", structure);
+  VdbFileInfo info;
+  try {
+    if (auto meta = file.getMetadata()) collectMetadata(*meta, info.metadata);
+    openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
+    for (const auto& g : *grids) {
+      VdbGridInfo gi;
+      gi.name = g->getName();
+      gi.type = g->valueType();
+      gi.isFloat = gi.type == "float";
+      collectMetadata(*g, info.metadata);
+      // The active box OpenVDB stores with each grid; without it, the grid is read below if wanted.
+      openvdb::CoordBBox box;
+      if (auto lo = g->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN),
+          hi = g->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
+          lo && hi)
+        box = openvdb::CoordBBox(openvdb::Coord(lo->value()), openvdb::Coord(hi->value()));
+      const bool wanted = gi.isFloat && std::find(measure.begin(), measure.end(), gi.name) != measure.end();
+      if (wanted) {
+        auto loaded = loadVdbGrids(path, {gi.name}, "file");
+        const VoxelGrid& v = loaded[0].grid;
+        gi.maxValue = v.maxValue();
+        gi.read = true;
+        const IndexBox ib = v.activeBox();
+        if (!ib.empty()) box = openvdb::CoordBBox(openvdb::Coord(ib.min.x, ib.min.y, ib.min.z), openvdb::Coord(ib.max.x, ib.max.y, ib.max.z));
+      }
+      if (!box.empty()) {
+        // World bounds of the voxel cells (centres at integer indices, +-0.5).
+        Vec3 lo(kInfinity), hi(-kInfinity);
+        const openvdb::Vec3d a = box.min().asVec3d() - openvdb::Vec3d(0.5), b = box.max().asVec3d() + openvdb::Vec3d(0.5);
+        for (int c = 0; c < 8; ++c) {
+          const openvdb::Vec3d p((c & 1) ? b.x() : a.x(), (c & 2) ? b.y() : a.y(), (c & 4) ? b.z() : a.z());
+          const openvdb::Vec3d w = g->transform().indexToWorld(p);
+          const Vec3 wf(static_cast<float>(w.x()), static_cast<float>(w.y()), static_cast<float>(w.z()));
+          lo = glm::min(lo, wf);
+          hi = glm::max(hi, wf);
+        }
+        if (std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z)) gi.worldMin = lo, gi.worldMax = hi;
+      }
+      info.grids.push_back(gi);
+    }
+  } catch (const InputError&) {
+    file.close();
+    throw;
+  } catch (const std::exception& e) {
+    file.close();
+    throw InputError(path + ": file: cannot read the grid list (" + e.what() + "); is it truncated?");
+  }
+  file.close();
+  return info;
 }
 
 }  // namespace candela

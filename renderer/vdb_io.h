@@ -21,3 +21,34 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
                                      const std::string& field);
 
 }  // namespace candela
+
+namespace candela {
+
+// What a VDB file holds, read without loading voxels where the file carries the statistics (OpenVDB
+// writes each grid's active bounding box as metadata); recognised float grids are read for their
+// value range.
+struct VdbGridInfo {
+  std::string name;
+  std::string type;           // OpenVDB's value type: "float", "vec3s", ...
+  bool isFloat = false;
+  Vec3 worldMin{0.0f}, worldMax{0.0f};  // world bounds of the active voxels (empty grid: equal)
+  float maxValue = 0.0f;      // float grids read by describeVdbFile only (else 0)
+  bool read = false;          // whether maxValue was measured
+};
+struct VdbFileInfo {
+  std::vector<VdbGridInfo> grids;
+  // Metadata keys of the file and its grids that name the application that wrote it ("blender/...",
+  // "creator" values): the importer guesses the up axis from them.
+  std::vector<std::string> metadata;
+  const VdbGridInfo* find(const std::string& name) const {
+    for (const auto& g : grids)
+      if (g.name == name) return &g;
+    return nullptr;
+  }
+};
+
+// Lists the grids of `path` (same structure checks as loadVdbGrids). Float grids named in
+// `measure` are read to find their largest value.
+VdbFileInfo describeVdbFile(const std::string& path, const std::vector<std::string>& measure = {});
+
+}  // namespace candela

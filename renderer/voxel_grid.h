@@ -33,6 +33,8 @@ class VoxelGrid {
   // Bounding box of the active voxels, in index space.
   IndexBox activeBox() const { return activeBox_; }
   size_t memoryBytes() const { return handle_ ? handle_->size() : 0; }
+  // Largest active value (NanoVDB's root statistics, computed when the grid was converted).
+  float maxValue() const { return grid_ ? grid_->tree().root().maximum() : 0.0f; }
 
   // A per-thread view with an accessor cache. Cheap to create: make one per ray walk.
   class Sampler {

@@ -14,7 +14,7 @@ SceneDiff diffScenes(const SceneDesc& a, const SceneDesc& b) {
   d.camera = toJson(a.camera) != toJson(b.camera);
   d.render = toJson(a.render) != toJson(b.render);
   Json sa = sceneToJson(a), sb = sceneToJson(b);
-  for (const char* key : {"camera", "render", "strategy"}) sa.erase(key), sb.erase(key);
+  for (const char* key : {"camera", "render", "strategy", "display", "description"}) sa.erase(key), sb.erase(key);
   d.structure = sa != sb || a.path != b.path;
   return d;
 }

@@ -1,0 +1,198 @@
+#include "vdb_import.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace candela {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string>& densityGridNames() {
+  static const std::vector<std::string> v{"density", "density_smoke", "smoke", "Density", "dens", "soot"};
+  return v;
+}
+const std::vector<std::string>& temperatureGridNames() {
+  static const std::vector<std::string> v{"temperature", "heat", "Temperature", "temp"};
+  return v;
+}
+const std::vector<std::string>& flameGridNames() {
+  static const std::vector<std::string> v{"flame", "fire", "flames", "fuel", "Flame"};
+  return v;
+}
+
+bool isVdbPath(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".vdb";
+}
+
+std::string VdbImportReport::summary() const {
+  std::string s = "density \"" + densityGrid + "\"";
+  s += emissionGrid.empty() ? ", no emission" : ", emission " + emissionMode + " from \"" + emissionGrid + "\"";
+  s += std::string(", ") + (up == UpAxis::Z ? "Z-up" : "Y-up") + " (" + upReason + ")";
+  if (!ignoredGrids.empty()) {
+    s += ", not used:";
+    for (const auto& g : ignoredGrids) s += " " + g;
+  }
+  return s;
+}
+
+void frameCamera(CameraDesc& camera, const Vec3& lo, const Vec3& hi, const Vec3& direction) {
+  const Vec3 center = 0.5f * (lo + hi);
+  const float radius = std::max(1e-4f, 0.5f * glm::length(hi - lo));
+  const float aspect = static_cast<float>(camera.resolution.first) / static_cast<float>(std::max(1, camera.resolution.second));
+  const float tanHalfY = std::tan(glm::radians(camera.fov_y) * 0.5f);
+  const float halfFov = std::atan(std::min(tanHalfY, tanHalfY * aspect));
+  // The bounding sphere just inside the narrower field of view: a box's corners rarely face the
+  // camera, so the whole sphere would leave the volume small in frame.
+  const float distance = radius / std::sin(halfFov) * 0.8f;
+  camera.look_at = center;
+  camera.position = center + glm::normalize(direction) * distance;
+  camera.up = Vec3(0.0f, 1.0f, 0.0f);
+}
+
+namespace {
+
+const VdbGridInfo* firstFloat(const VdbFileInfo& info, const std::vector<std::string>& names) {
+  for (const auto& n : names)
+    if (const VdbGridInfo* g = info.find(n); g && g->isFloat) return g;
+  return nullptr;
+}
+
+// Blender (Mantaflow bakes and its volume export) writes Z-up data and says so in its metadata keys.
+bool writtenByBlender(const VdbFileInfo& info, std::string& why) {
+  for (const auto& m : info.metadata) {
+    std::string lower = m;
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (lower.rfind("blender/", 0) == 0 || lower.find("=blender") != std::string::npos || lower.find("mantaflow") != std::string::npos) {
+      why = "metadata \"" + m.substr(0, 60) + "\" says Blender wrote it";
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& options, VdbImportReport* reportOut) {
+  std::vector<std::string> measure;
+  for (const auto* list : {&densityGridNames(), &temperatureGridNames(), &flameGridNames()})
+    measure.insert(measure.end(), list->begin(), list->end());
+  const VdbFileInfo info = describeVdbFile(vdbPath, measure);
+  VdbImportReport report;
+
+  const VdbGridInfo* density = firstFloat(info, densityGridNames());
+  if (!density) {
+    // A file with a single float grid of another name (a "fog" export): use that.
+    std::vector<const VdbGridInfo*> floats;
+    for (const auto& g : info.grids)
+      if (g.isFloat) floats.push_back(&g);
+    if (floats.size() == 1) density = floats[0];
+  }
+  if (!density) {
+    std::string present;
+    for (const auto& g : info.grids) present += (present.empty() ? "" : ", ") + g.name + " (" + g.type + ")";
+    throw InputError(vdbPath + ": density_grid: expected a float grid named one of density, density_smoke, smoke, soot; the file holds: " +
+                     (present.empty() ? "no grids" : present));
+  }
+  SceneDesc scene;
+  const fs::path vdb(vdbPath);
+  scene.path = (vdb.parent_path() / (vdb.stem().string() + ".json")).string();
+  scene.render.spp = 256;
+  scene.render.max_depth = 16;
+
+  VolumeDesc volume;
+  volume.name = vdb.stem().string();
+  volume.file = vdb.filename().string();
+  volume.density_grid = density->name;
+  report.densityGrid = density->name;
+  volume.albedo = Vec3(0.9f);
+  // Density is extinction per world unit, the Cycles / Houdini convention (docs/conventions.md).
+  volume.sigma_t_scale = 1.0f;
+
+  const VdbGridInfo* flame = firstFloat(info, flameGridNames());
+  const VdbGridInfo* temperature = firstFloat(info, temperatureGridNames());
+  if (flame && flame->maxValue > 0.0f) {
+    // Flame (or fuel) drives a fire-coloured emission grid; its peak maps to radiance 8.
+    volume.emission.mode = EmissionMode::Grid;
+    volume.emission_grid = flame->name;
+    volume.emission.color = Vec3(1.0f, 0.45f, 0.12f);
+    volume.emission.intensity = 8.0f / flame->maxValue;
+    report.emissionGrid = flame->name;
+    report.emissionMode = "grid";
+  } else if (temperature && temperature->maxValue > 0.0f) {
+    // Kelvin when the values look like Kelvin, else a normalised simulation temperature whose peak
+    // maps to 2000 K (500 K, where a blackbody turns black, at zero).
+    volume.emission.mode = EmissionMode::Blackbody;
+    volume.temperature_grid = temperature->name;
+    if (temperature->maxValue >= 200.0f) {
+      volume.emission.temperature_scale = 1.0f;
+      volume.emission.temperature_offset = 0.0f;
+    } else {
+      volume.emission.temperature_scale = 1500.0f / temperature->maxValue;
+      volume.emission.temperature_offset = 500.0f;
+    }
+    report.emissionGrid = temperature->name;
+    report.emissionMode = "blackbody";
+  }
+  for (const auto& g : info.grids)
+    if (g.name != volume.density_grid && g.name != report.emissionGrid) report.ignoredGrids.push_back(g.name + (g.isFloat ? "" : " (" + g.type + ")"));
+
+  // Up axis: Z-up data is turned to Candela's Y-up by -90 degrees about X ((x, y, z) -> (x, z, -y)).
+  std::string why;
+  UpAxis up = options.up;
+  if (up == UpAxis::Auto) {
+    up = writtenByBlender(info, why) ? UpAxis::Z : UpAxis::Y;
+    if (up == UpAxis::Y) why = "nothing in the file says otherwise";
+  } else {
+    why = "chosen";
+  }
+  report.up = up;
+  report.upReason = why;
+  if (up == UpAxis::Z) volume.transform.rotate_deg = Vec3(-90.0f, 0.0f, 0.0f);
+  scene.volumes.push_back(volume);
+
+  // World bounds after the up-axis rotation, for the camera and the ground of the light rig.
+  Vec3 lo = density->worldMin, hi = density->worldMax;
+  if (up == UpAxis::Z) {
+    const Vec3 a(lo.x, lo.z, -hi.y), b(hi.x, hi.z, -lo.y);
+    lo = a, hi = b;
+  }
+  if (!(hi.x > lo.x)) lo = Vec3(-0.5f), hi = Vec3(0.5f);  // an empty grid: frame a unit box
+  scene.camera.resolution = {640, 360};
+  scene.camera.fov_y = 35.0f;
+  // Three-quarter view from slightly above, as a turntable starts.
+  frameCamera(scene.camera, lo, hi, Vec3(0.45f, 0.25f, 1.0f));
+
+  if (options.light_rig) {
+    LightDesc sun;
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(Vec3(-0.5f, -0.75f, -0.45f));
+    sun.color = Vec3(1.0f, 0.93f, 0.82f);
+    sun.intensity = 3.0f;
+    LightDesc sky;
+    sky.type = LightType::Environment;
+    sky.color = Vec3(0.45f, 0.6f, 0.85f);
+    sky.intensity = 0.25f;
+    scene.lights = {sun, sky};
+  }
+  scene.strategy = strategyPreset(volume.emission.mode == EmissionMode::None ? "conventional" : "emission");
+  if (reportOut) *reportOut = report;
+  return scene;
+}
+
+SceneDesc loadSceneOrVdb(const std::string& path, const std::vector<std::string>& settings, const std::string& preset,
+                         const VdbImportOptions& options, VdbImportReport* report) {
+  if (!isVdbPath(path)) return loadSceneDesc(path, settings, preset);
+  SceneDesc scene = sceneFromVdb(path, options, report);
+  if (settings.empty() && preset.empty()) return scene;
+  // The same edits a scene file takes, validated the same way (errors name the VDB).
+  Json doc = sceneToJson(scene);
+  if (!preset.empty()) doc["strategy"] = Json{{"preset", preset}};
+  for (const auto& s : settings) applySetting(doc, s, path + " (--set " + s.substr(0, 80) + ")");
+  SceneDesc edited = parseSceneDesc(doc, scene.path);
+  return edited;
+}
+
+}  // namespace candela
