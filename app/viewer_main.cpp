@@ -1,5 +1,5 @@
 // candela: the look-dev viewer.
-//   candela [SCENE.json] [--strategy PRESET] [--set key=value ...] [--ocio CONFIG] [--threads N]
+//   candela [SCENE.json | VOLUME.vdb [--up auto|y|z]] [--strategy PRESET] [--set key=value ...] [--ocio CONFIG] [--threads N]
 //           [--screenshot OUT.png (--after SECONDS | --after-spp N)] [--quit]
 //           [--measure-latency N] [--edit key=value ...]
 //           [--panes P1,P2,... [--equal-time SECONDS] [--figure OUT.png] [--reference REF.exr | --reference-spp N]]
@@ -18,7 +18,11 @@
 int main(int argc, char** argv) {
   candela::ViewerOptions o;
   CLI::App app{"Candela look-dev viewer: progressive volume path tracing with live edits and OCIO display"};
-  app.add_option("scene", o.scenePath, "Scene JSON (default: assets/scenes/torch-in-mist.json)");
+  app.add_option("scene", o.scenePath,
+                 "Scene JSON, or a .vdb to open as a volume: grids recognised by name, framed, lit by a sun and sky, auto exposure "
+                 "(default: assets/scenes/torch-in-mist.json)");
+  app.add_option("--up", o.upAxis, "Opening a .vdb: its up axis, auto (Z when Blender wrote it, else Y), y or z")
+      ->check(CLI::IsMember({"auto", "y", "z"}));
   std::string presets;
   for (const auto& n : candela::strategyPresetNames()) presets += (presets.empty() ? "" : ", ") + n;
   app.add_option("--strategy", o.preset, "Strategy preset replacing the scene's: " + presets);
@@ -38,6 +42,14 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(2);
   app.add_option("--edit", o.editsAfterStart, "Apply a key=value edit once the first image is shown (as if typed in the panel)");
+  app.add_option("--undo", o.undoSteps, "Scripted: undo this many edits after the --edit edits")->check(CLI::NonNegativeNumber);
+  app.add_option("--redo", o.redoSteps, "Scripted: then redo this many")->check(CLI::NonNegativeNumber);
+  app.add_option("--save-as", o.saveAsPath, "Scripted: then save the scene (with every edit) to this JSON file");
+  app.add_option("--drop", o.dropPath, "Scripted: open this file as if dropped on the window, once the first scene shows");
+  app.add_flag("--snapshot-compare", o.snapshotCompare,
+               "Scripted: snapshot the image at --after-spp, apply the --edit edits, compare the live render with it in the wipe view");
+  app.add_option("--frame-steps", o.frameSteps, "Scripted: step the timeline this many frames, timing each frame's first image")
+      ->check(CLI::NonNegativeNumber);
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
   app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(candela::finitePositive());
@@ -69,7 +81,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   // No scene and no other mode: the talk's Fig. 1 live, conventional | + emission | + scattering (MIS).
-  if (o.scenePath.empty() && o.panes.empty() && o.preset.empty() && o.screenshotPath.empty() && o.measureEdits == 0)
+  if (o.scenePath.empty() && o.panes.empty() && o.preset.empty() && o.screenshotPath.empty() && o.measureEdits == 0 && o.dropPath.empty())
     o.panes = {"conventional", "emission", "full"};
   if (!o.figurePath.empty() && (o.panes.empty() || o.equalTime <= 0.0)) {
     std::fprintf(stderr, "candela: --figure needs --panes and --equal-time\n");

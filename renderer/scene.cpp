@@ -6,6 +6,7 @@
 
 #include <deque>
 #include <filesystem>
+#include "sequence.h"
 #include <mutex>
 
 namespace candela {
@@ -51,6 +52,21 @@ std::vector<LoadedGrid> loadGridsCached(const std::string& path, const std::vect
 }
 
 }  // namespace
+
+void prefetchSceneGrids(const SceneDesc& desc) {
+  namespace fs = std::filesystem;
+  const fs::path base = desc.path.empty() ? fs::path(".") : fs::path(desc.path).parent_path();
+  for (size_t i = 0; i < desc.volumes.size(); ++i) {
+    const VolumeDesc& v = desc.volumes[i];
+    if (v.has_generator) continue;
+    std::string path = fs::path(v.file).is_absolute() ? v.file : (base / v.file).lexically_normal().string();
+    path = substituteFrame(path, desc.render.frame);
+    std::vector<std::string> names{v.density_grid};
+    if (v.emission.mode == EmissionMode::Blackbody) names.push_back(v.temperature_grid);
+    if (v.emission.mode == EmissionMode::Grid) names.push_back(v.emission_grid);
+    loadGridsCached(path, names, "volumes." + std::to_string(i));
+  }
+}
 
 // A medium the renderer can track (input_limits.h): finite world placement, voxels of a sane size,
 // and no voxel so dense that tracking steps vanish below float precision. Checked before majorants
@@ -113,6 +129,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
         throw InputError(desc.path + ": " + field + ".emission.mode: generators make no emission grid; expected \"none\" or \"blackbody\"");
     } else {
       path = fs::path(v.file).is_absolute() ? v.file : (base / v.file).lexically_normal().string();
+      path = substituteFrame(path, desc.render.frame);  // fire.####.vdb: this scene's frame
     }
     std::vector<std::string> names{density};
     if (v.emission.mode == EmissionMode::Blackbody) names.push_back(temperature);

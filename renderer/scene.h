@@ -31,6 +31,10 @@ class Camera {
   int width_ = 0, height_ = 0;
 };
 
+// Loads the grids `desc` will need (at its render.frame) into the loader's cache: a later
+// Scene::build of the same files and grids does not read them again. Throws like Scene::build.
+void prefetchSceneGrids(const SceneDesc& desc);
+
 class Scene {
  public:
   // Loads grids (generating procedural ones into the cache), builds majorants, lights, surfaces.

@@ -179,6 +179,7 @@ struct RenderSettings {
   float time_s = 0.0f;   // when > 0, render until this many seconds have passed instead of spp
   uint32_t seed = 1;
   int max_depth = 32;    // most scattering or bounce events on a path
+  int frame = 1;         // substituted into volume file patterns (fire.####.vdb)
 
   template <class V>
   void visit(V& v) {
@@ -186,6 +187,7 @@ struct RenderSettings {
     v.field("time_s", time_s, "Render for this many seconds instead (0: use spp)", Range{0.0, 1e7});
     v.field("seed", seed, "Random seed; a seed and spp give the same image on any thread count");
     v.field("max_depth", max_depth, "Most scattering or surface-bounce events on a path", Range{0, 100000});
+    v.field("frame", frame, "Frame number put into volume file patterns: fire.####.vdb, fire_$F4.vdb, fire.%04d.vdb", Range{-1000000, 1000000});
   }
 };
 

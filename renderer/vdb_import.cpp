@@ -1,5 +1,7 @@
 #include "vdb_import.h"
 
+#include "sequence.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -31,6 +33,7 @@ std::string VdbImportReport::summary() const {
   std::string s = "density \"" + densityGrid + "\"";
   s += emissionGrid.empty() ? ", no emission" : ", emission " + emissionMode + " from \"" + emissionGrid + "\"";
   s += std::string(", ") + (up == UpAxis::Z ? "Z-up" : "Y-up") + " (" + upReason + ")";
+  if (!sequence.empty()) s += ", sequence " + sequence;
   if (!ignoredGrids.empty()) {
     s += ", not used:";
     for (const auto& g : ignoredGrids) s += " " + g;
@@ -105,6 +108,18 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
   VolumeDesc volume;
   volume.name = vdb.stem().string();
   volume.file = vdb.filename().string();
+  // One frame of a simulation cache (fire.0012.vdb beside fire.0013.vdb): open the sequence at it.
+  std::string pattern;
+  int frame = 1;
+  if (detectSequence(vdbPath, pattern, frame)) {
+    volume.file = fs::path(pattern).filename().string();
+    scene.render.frame = frame;
+    std::string stem = fs::path(pattern).stem().string();
+    stem = stem.substr(0, stem.find('#'));
+    while (!stem.empty() && (stem.back() == '.' || stem.back() == '_' || stem.back() == '-')) stem.pop_back();
+    if (!stem.empty()) scene.path = (vdb.parent_path() / (stem + ".json")).string(), volume.name = stem;
+    report.sequence = volume.file;
+  }
   volume.density_grid = density->name;
   report.densityGrid = density->name;
   volume.albedo = Vec3(0.9f);

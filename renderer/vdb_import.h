@@ -42,6 +42,7 @@ struct VdbImportReport {
   std::string densityGrid, emissionGrid, emissionMode;
   UpAxis up = UpAxis::Y;
   std::string upReason;
+  std::string sequence;                   // the frame pattern, when the file is one frame of several
   std::vector<std::string> ignoredGrids;  // present but unused (vector grids such as Cd, velocity)
   std::string summary() const;
 };

@@ -15,7 +15,8 @@ SceneDiff diffScenes(const SceneDesc& a, const SceneDesc& b) {
   d.render = toJson(a.render) != toJson(b.render);
   Json sa = sceneToJson(a), sb = sceneToJson(b);
   for (const char* key : {"camera", "render", "strategy", "display", "description"}) sa.erase(key), sb.erase(key);
-  d.structure = sa != sb || a.path != b.path;
+  // Another frame reads other VDB files: a rebuild, not a render-settings change.
+  d.structure = sa != sb || a.path != b.path || a.render.frame != b.render.frame;
   return d;
 }
 

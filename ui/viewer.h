@@ -39,6 +39,17 @@ struct ViewerOptions {
   // Open the guide inspector on this pixel once the first image is shown (as a Ctrl+click would);
   // a scripted screenshot then waits for its chart.
   std::vector<int> inspectPixel;
+  // Opening a .vdb: its up axis (auto, y or z).
+  std::string upAxis = "auto";
+  // The document, scripted: undo / redo this many steps after the edits, then save to this path.
+  int undoSteps = 0, redoSteps = 0;
+  std::string saveAsPath;
+  // Open this file as if it were dropped on the window, once the first scene is shown.
+  std::string dropPath;
+  // Keep a snapshot of the first image (at --after-spp), apply the edits, compare in the wipe view.
+  bool snapshotCompare = false;
+  // Step the timeline forward this many frames, timing each step's first image.
+  int frameSteps = 0;
 };
 
 // Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.

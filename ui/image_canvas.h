@@ -1,0 +1,82 @@
+// The image area of the viewer (tev's ImageCanvas): where the image sits in the window, its 2D zoom
+// and pan (shared by every pane, so they stay in sync), the wipe divider between two images, the
+// side-by-side panes, and which pixel the readout shows. It knows nothing about scenes or rendering:
+// it draws GlDisplays it is handed.
+#pragma once
+
+#include "gl_display.h"
+
+#include <imgui.h>
+
+#include <vector>
+
+namespace candela {
+
+class ImageCanvas {
+ public:
+  // A rectangle in window coordinates (top-left origin, window units).
+  struct Rect {
+    float x = 0, y = 0, w = 0, h = 0;
+    bool contains(float px, float py) const { return px >= x && py >= y && px < x + w && py < y + h; }
+    bool contains(ImVec2 p) const { return contains(p.x, p.y); }
+  };
+  // A window rectangle in framebuffer pixels (bottom-left origin).
+  struct PixelRect {
+    int x = 0, y = 0, w = 0, h = 0;
+  };
+
+  explicit ImageCanvas(GLFWwindow* window) : window_(window) {}
+
+  // Fits an image of `aspect` (width / height of everything shown side by side; 0: unknown) into
+  // `area`, centred. Call once a frame before anything else.
+  void layout(const Rect& area, float aspect);
+  const Rect& rect() const { return rect_; }
+  // Pane i of n side by side (the whole rectangle in wipe mode).
+  Rect paneRect(int i, int n) const;
+  PixelRect framebufferRect(const Rect& r) const;
+  // Image coordinates (fractions, v down) under a window point of rectangle r, through the zoom.
+  ImVec2 imageUv(const Rect& r, ImVec2 p) const;
+  const ViewWindow& view() const { return view_; }
+
+  // Ctrl+wheel zoom about the cursor, Shift+drag pan, and (in wipe mode) dragging the divider.
+  // Returns true when it used the mouse this frame (the camera must not move then).
+  bool handleMouse(int paneCount);
+  void resetZoom();
+
+  // Wipe: two images in one frame, split at a divider the user drags.
+  bool wipe() const { return wipe_; }
+  void setWipe(bool on) { wipe_ = on; }
+  float wipePosition() const { return wipePosition_; }
+
+  // Draws `display` into the rectangle (nearest filtering when zoomed past 2 screen pixels per
+  // image pixel, unless `preview`).
+  void draw(const GlDisplay& display, int imageWidth, bool preview) const;
+  // Draws `left` and `right` split at the divider (wipe) or side by side.
+  void drawPair(const GlDisplay& left, const GlDisplay& right) const;
+  // Draws n displays side by side (or the first two split by the divider in wipe mode).
+  void drawPanes(const std::vector<const GlDisplay*>& panes) const;
+  // The divider line and its handle, over whatever was drawn.
+  void drawDivider(ImDrawList* draw) const;
+
+  // The pixel under the cursor (or the locked one) of an image of width x height; false when none.
+  bool readoutPixel(int width, int height, int& px, int& py) const;
+  bool readoutLocked() const { return readoutLocked_; }
+  // L: lock the readout on the pixel under the cursor, or unlock it.
+  void toggleReadoutLock(int width, int height);
+
+ private:
+  void updateView();
+  GLFWwindow* window_;
+  Rect rect_;
+  int paneCount_ = 1;
+  ViewWindow view_;
+  float zoom_ = 1.0f;
+  ImVec2 viewCenter_{0.5f, 0.5f};
+  bool wipe_ = false;
+  float wipePosition_ = 0.5f;
+  bool draggingWipe_ = false;
+  bool readoutLocked_ = false;
+  int lockedX_ = 0, lockedY_ = 0;
+};
+
+}  // namespace candela

@@ -1,0 +1,232 @@
+// The viewer's parts, private to ui/. The Viewer owns the window's state and the document (the
+// scene being looked at: open, edit, save, undo); the other concerns live in their own files:
+//   image_canvas.h     the image area: zoom, pan, wipe, panes, readout (tev's ImageCanvas)
+//   viewer_panels.cpp  the Parameters panel, the comparison panel, snapshots, timeline, status bar
+//   viewer_menus.cpp   the menu bar, the open / save / confirm dialogs and the keyboard shortcuts
+//   viewer_output.cpp  screenshots and comparison figures
+//   scripted_driver.h  scripted runs (--screenshot, --figure, --measure-latency, --edit, ...)
+#pragma once
+
+#include "color_pipeline.h"
+#include "comparison_session.h"
+#include "edit_history.h"
+#include "gl_display.h"
+#include "guide_inspector_view.h"
+#include "image_canvas.h"
+#include "param_editor.h"
+#include "render_session.h"
+#include "scripted_driver.h"
+#include "sequence.h"
+#include "snapshot_store.h"
+#include "vdb_import.h"
+#include "view_settings.h"
+#include "viewer.h"
+
+#include <imgui.h>
+
+#include <chrono>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+using ViewerClock = std::chrono::steady_clock;
+inline double secondsSince(ViewerClock::time_point t) { return std::chrono::duration<double>(ViewerClock::now() - t).count(); }
+
+std::string defaultScenePath();
+// A path next to `wanted` that does not exist yet: NAME.png, NAME-2.png, ...
+std::string freshPath(const std::filesystem::path& wanted);
+std::filesystem::file_time_type modificationTime(const std::string& path);
+
+// Edge-triggered key presses from GLFW (ImGui 1.86 has no named keys for letters).
+class Keys {
+ public:
+  bool pressed(GLFWwindow* w, int key) {
+    const bool down = glfwGetKey(w, key) == GLFW_PRESS;
+    const bool was = down_[key];
+    down_[key] = down;
+    return down && !was;
+  }
+
+ private:
+  bool down_[GLFW_KEY_LAST + 1] = {};
+};
+
+class Viewer {
+ public:
+  Viewer(GLFWwindow* window, const ViewerOptions& options);
+  ~Viewer();
+  int run();
+
+ private:
+  friend class ScriptedDriver;
+
+  // --- the document: open, edit, save, undo (viewer.cpp) ---
+  void openScene(const std::string& path, const std::vector<std::string>& settings = {}, const std::string& preset = "");
+  // Validates the edited description (the same checks as a scene file) and sends it to the renderer.
+  // A bad value is reported and the fields return to the last good state. `group` joins the edit to
+  // the previous undo step of the same gesture.
+  void submitEdit(const std::string& group = "");
+  void applySettingEdit(const std::string& assignment);
+  void beginLatency(uint64_t request);
+  nlohmann::json lookState() const;  // {"scene", "display"}: what undo and snapshots keep
+  void restoreLook(const nlohmann::json& look, const std::string& what);
+  void recordEdit(const std::string& group = "");
+  void undo();
+  void redo();
+  bool save(const std::string& path);
+  void requestSave();  // Ctrl+S: save, or Save As for a document never saved
+  // Runs `action` now, or after asking when there are unsaved edits (Save / Discard / Cancel).
+  void confirmDiscard(const std::string& what, std::function<void()> action);
+  void updateTitle();
+  void requestQuit();  // the window's close button, Ctrl+Q, File > Quit: asks about unsaved edits
+  void report(const std::string& text);
+  void applyDisplay();
+  void setDisplay(const DisplaySettings& display, const std::string& group = "display");
+  void pollSession();
+  void pollSceneFile();
+  void pollDrops();
+  void frameVolume();
+  void handleCamera();
+
+  // --- equal-time comparison (viewer.cpp, panels) ---
+  void startComparisonMode(const std::string& path);
+  void restartComparison();
+  void pollComparison();
+  void uploadPanes();
+  int paneCount() const { return compare_ ? std::max<int>(1, static_cast<int>(paneSpecs_.size())) : 1; }
+  DisplaySettings paneDisplay() const;
+
+  // --- snapshots and the timeline (viewer_panels.cpp) ---
+  void takeSnapshot();
+  void compareSnapshot(int id);
+  void drawSnapshots();
+  void drawTimeline();
+  void setFrame(int frame);
+  void pollTimeline();
+
+  // --- panels and menus ---
+  void drawMenuBar();
+  void drawPanel();
+  void drawComparisonPanel();
+  void drawPaneLabels();
+  void drawStatusBar();
+  void drawDialogs();
+  void handleKeys();
+
+  // --- output (viewer_output.cpp) ---
+  bool screenshot(const std::string& requestedPath);
+  bool writeFigure(const std::string& path);
+  void captureFigure();
+  void captureCanvas();
+  std::optional<std::string> canvasCaptureRequest_;
+
+  float imageAspect() const;
+
+  GLFWwindow* window_;
+  ViewerOptions options_;
+  RenderSession session_;
+  ColorPipeline colors_;
+  std::unique_ptr<GlDisplay> gl_;
+  DisplaySettings display_;
+  ProgressLimits limits_;
+  ImageCanvas canvas_;
+
+  // The document.
+  std::string scenePath_;     // the file opened (scene JSON or .vdb), watched for changes
+  std::string documentPath_;  // where Save writes (a scene JSON)
+  bool untitled_ = false;     // never saved (an opened VDB): Save asks where
+  bool dirty_ = false;        // edits since the last open or save
+  std::string scenePreset_;
+  std::vector<std::string> sceneSettings_;
+  std::filesystem::file_time_type sceneTime_{};
+  ViewerClock::time_point lastPoll_ = ViewerClock::now();
+  uint64_t pendingOpen_ = 0;
+  bool haveScene_ = false;
+  SceneDesc edited_;     // what the panels edit
+  SceneDesc fileScene_;  // as opened (camera reset)
+  EditHistory history_;
+  bool gestureActive_ = false;  // a drag or a widget edit in progress: its edits are one undo step
+  ViewerClock::time_point lastWheel_;
+  bool autoExposurePending_ = false;
+  std::string importSummary_;
+  std::string title_;
+  std::vector<std::string> droppedPaths_;
+
+  // Dialogs.
+  std::deque<std::pair<std::string, ViewerClock::time_point>> messages_;
+  bool showMessages_ = false, showOpen_ = false, showSaveAs_ = false, showDiscard_ = false;
+  std::string openPath_, saveAsPath_;
+  std::vector<std::string> openCandidates_;
+  std::string discardWhat_;
+  std::function<void()> pendingAction_;
+  bool closeConfirmed_ = false;
+
+  // Comparison panes.
+  std::unique_ptr<ComparisonSession> compare_;
+  std::shared_ptr<const ComparisonFrame> compFrame_;
+  uint64_t compVersion_ = 0;
+  std::vector<std::unique_ptr<GlDisplay>> paneGl_;
+  std::vector<bool> paneDirty_;
+  std::vector<PaneSpec> paneSpecs_;
+  enum class PaneView { Image, AbsoluteError, RelativeError };
+  PaneView paneView_ = PaneView::Image;
+  std::string referenceInput_;
+  int referenceSppInput_ = 256;
+  std::string referenceStrategyInput_ = "emission";
+  Image reference_;
+  bool figureDone_ = false;
+  std::optional<std::string> figureRequest_;
+
+  // The live image.
+  std::shared_ptr<const Frame> frame_;
+  uint64_t uploadedVersion_ = 0;
+  bool outputDirty_ = true;
+
+  // Snapshots: compared with the live image in the canvas (wipe or side by side).
+  SnapshotStore snapshots_;
+  std::map<int, GLuint> thumbnails_;
+  int comparedSnapshot_ = 0;  // 0: none
+  std::unique_ptr<GlDisplay> snapshotGl_;
+  bool snapshotDirty_ = false;
+  bool showSnapshots_ = false;
+
+  // The timeline of a scene whose volumes name a frame pattern.
+  FrameRange frames_;
+  bool playing_ = false;
+  int playSpp_ = 16;
+  uint64_t frameRequest_ = 0;
+  ViewerClock::time_point frameStepStart_;
+  bool frameLatencyPending_ = false;
+  double lastFrameStepMs_ = 0.0;
+  std::unique_ptr<FramePrefetcher> prefetcher_;
+
+  Keys keys_;
+  int dragButton_ = -1;
+  GuideInspectorView inspector_;  // Ctrl+click on a pixel
+
+  uint64_t latencyRequest_ = 0;
+  ViewerClock::time_point latencyStart_;
+  double lastLatencyMs_ = 0.0;
+  std::vector<double> latencies_;
+  std::deque<double> frameTimes_;
+  double openStartSeconds_ = 0.0;  // time of the open that the first image is timed from
+  ViewerClock::time_point openStart_;
+  bool openLatencyPending_ = false;
+
+  const float panelWidth_ = 420.0f;
+  float statusHeight_ = 0.0f, menuHeight_ = 0.0f, timelineHeight_ = 0.0f;
+
+  ScriptedDriver script_;
+  bool quitNow_ = false;
+  int busyFrames_ = 3;
+  int exitCode_ = 0;
+};
+
+}  // namespace candela

@@ -1,0 +1,243 @@
+// The menu bar, the dialogs (open, save as, unsaved edits) and the keyboard shortcuts.
+#include "viewer_impl.h"
+
+#include <algorithm>
+
+namespace candela {
+
+namespace fs = std::filesystem;
+
+void Viewer::drawMenuBar() {
+  if (!ImGui::BeginMainMenuBar()) return;
+  menuHeight_ = ImGui::GetWindowSize().y;
+  const bool single = haveScene_ && !compare_;
+  if (ImGui::BeginMenu("File")) {
+    if (ImGui::MenuItem("Open scene or VDB...", "Ctrl+O")) showOpen_ = true;
+    if (ImGui::MenuItem("Save", "Ctrl+S", false, single)) requestSave();
+    if (ImGui::MenuItem("Save As...", "Ctrl+Shift+S", false, single)) showSaveAs_ = true;
+    if (ImGui::MenuItem("Reload scene", nullptr, false, !scenePath_.empty()))
+      confirmDiscard("reload", [this] { openScene(scenePath_, sceneSettings_, scenePreset_); });
+    ImGui::Separator();
+    if (ImGui::MenuItem("Save screenshot", "S / F12", false, frame_ != nullptr)) screenshot("");
+    if (ImGui::MenuItem("Snapshot", "K", false, frame_ != nullptr && !compare_)) takeSnapshot();
+    ImGui::Separator();
+    if (ImGui::MenuItem("Quit", "Ctrl+Q")) requestQuit();
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Edit")) {
+    if (ImGui::MenuItem("Undo", "Ctrl+Z", false, history_.canUndo())) undo();
+    if (ImGui::MenuItem("Redo", "Ctrl+Shift+Z", false, history_.canRedo())) redo();
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("View")) {
+    if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
+    if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) edited_.camera = fileScene_.camera, submitEdit();
+    if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked()) && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
+    if (ImGui::MenuItem("Snapshots", "Shift+K", showSnapshots_)) showSnapshots_ = !showSnapshots_;
+    ImGui::Separator();
+    for (const auto& [value, name] : EnumNames<ChannelView>::get())
+      if (ImGui::MenuItem((std::string("Channel: ") + name).c_str(), value == ChannelView::RGB ? "C cycles" : nullptr, display_.channel == value)) {
+        DisplaySettings d = display_;
+        d.channel = value;
+        setDisplay(d);
+      }
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Display")) {
+    for (const auto& d : colors_.displays())
+      if (ImGui::BeginMenu(d.c_str())) {
+        for (const auto& v : colors_.views(d))
+          if (ImGui::MenuItem(v.c_str(), nullptr, display_.display == d && display_.view == v)) {
+            DisplaySettings s = display_;
+            s.display = d, s.view = v;
+            setDisplay(s);
+          }
+        ImGui::EndMenu();
+      }
+    if (ImGui::BeginMenu("Look")) {
+      DisplaySettings s = display_;
+      if (ImGui::MenuItem("(none)", nullptr, display_.look.empty())) s.look.clear(), setDisplay(s);
+      for (const auto& l : colors_.looks())
+        if (ImGui::MenuItem(l.c_str(), nullptr, display_.look == l)) s.look = l, setDisplay(s);
+      ImGui::EndMenu();
+    }
+    ImGui::Separator();
+    ImGui::TextDisabled("Config: %s", colors_.configPath().c_str());
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Help")) {
+    ImGui::MenuItem("Messages", nullptr, &showMessages_);
+    ImGui::TextDisabled("Open: File > Open, Ctrl+O, or drop a scene (.json) or volume (.vdb) on the window");
+    ImGui::TextDisabled("Mouse on the image: left tumble, middle track, right dolly, wheel dolly (Alt optional)");
+    ImGui::TextDisabled("Image: Ctrl+wheel zoom, Shift+left drag pan, 0 fit (all panes together)");
+    ImGui::TextDisabled("Ctrl+click a pixel: guide inspector (distance densities along its ray)");
+    ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot");
+    ImGui::TextDisabled("Ctrl+Z undo, Ctrl+Shift+Z redo, Ctrl+S save, K snapshot, Shift+K snapshots, Left/Right frame, Space play");
+    ImGui::EndMenu();
+  }
+  ImGui::EndMainMenuBar();
+}
+
+void Viewer::drawDialogs() {
+  // --- Open ---
+  if (showOpen_) {
+    showOpen_ = false;
+    ImGui::OpenPopup("Open scene or VDB");
+    openPath_ = scenePath_;
+    // Scenes and volumes under assets/scenes and beside the current scene, listed once per opening.
+    openCandidates_.clear();
+    std::vector<fs::path> roots{fs::path(CANDELA_ASSET_DIR) / "scenes"};
+    if (!scenePath_.empty()) roots.push_back(fs::path(scenePath_).parent_path());
+    for (const auto& root : roots) {
+      std::error_code ec;
+      int visited = 0;
+      for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator() && ++visited < 5000;
+           it.increment(ec)) {
+        const std::string ext = it->path().extension().string();
+        if (ext == ".json" || isVdbPath(it->path().string())) openCandidates_.push_back(fs::weakly_canonical(it->path()).string());
+      }
+    }
+    std::sort(openCandidates_.begin(), openCandidates_.end());
+    openCandidates_.erase(std::unique(openCandidates_.begin(), openCandidates_.end()), openCandidates_.end());
+  }
+  ImGui::SetNextWindowSize(ImVec2(640, 420), ImGuiCond_Appearing);
+  if (ImGui::BeginPopupModal("Open scene or VDB")) {
+    bool go = ImGui::InputText("path", &openPath_, ImGuiInputTextFlags_EnterReturnsTrue);
+    ImGui::TextDisabled("Scenes (.json) and volumes (.vdb) found:");
+    ImGui::BeginChild("scenes", ImVec2(0, -ImGui::GetFrameHeightWithSpacing()), true);
+    for (const auto& f : openCandidates_)
+      if (ImGui::Selectable(f.c_str(), f == openPath_, ImGuiSelectableFlags_AllowDoubleClick)) {
+        openPath_ = f;
+        if (ImGui::IsMouseDoubleClicked(0)) go = true;
+      }
+    ImGui::EndChild();
+    go |= ImGui::Button("Open");
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) ImGui::CloseCurrentPopup();
+    if (go) {
+      const std::string path = openPath_;
+      ImGui::CloseCurrentPopup();
+      confirmDiscard("open " + fs::path(path).filename().string(), [this, path] { openScene(path); });
+    }
+    ImGui::EndPopup();
+  }
+
+  // --- Save As ---
+  if (showSaveAs_) {
+    showSaveAs_ = false;
+    ImGui::OpenPopup("Save scene as");
+    saveAsPath_ = documentPath_.empty() ? (fs::current_path() / "scene.json").string() : documentPath_;
+  }
+  ImGui::SetNextWindowSize(ImVec2(640, 0), ImGuiCond_Appearing);
+  if (ImGui::BeginPopupModal("Save scene as")) {
+    bool go = ImGui::InputText("path", &saveAsPath_, ImGuiInputTextFlags_EnterReturnsTrue);
+    ImGui::TextDisabled("A scene JSON; volume paths are written relative to it.");
+    if (fs::exists(saveAsPath_)) ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.3f, 1.0f), "%s exists and will be replaced", saveAsPath_.c_str());
+    go |= ImGui::Button("Save");
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+      pendingAction_ = nullptr;  // a quit waiting for this save is cancelled too
+      ImGui::CloseCurrentPopup();
+    }
+    if (go) {
+      std::string path = saveAsPath_;
+      if (fs::path(path).extension() != ".json") path += ".json";
+      if (save(path)) {
+        ImGui::CloseCurrentPopup();
+        if (pendingAction_) {
+          auto action = std::move(pendingAction_);
+          pendingAction_ = nullptr;
+          action();
+        }
+      }
+    }
+    ImGui::EndPopup();
+  }
+
+  // --- Unsaved edits ---
+  if (showDiscard_) {
+    showDiscard_ = false;
+    ImGui::OpenPopup("Unsaved edits");
+  }
+  if (ImGui::BeginPopupModal("Unsaved edits", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::Text("%s has unsaved edits.", documentPath_.empty() ? "The scene" : fs::path(documentPath_).filename().string().c_str());
+    ImGui::Text("Save them before you %s?", discardWhat_.c_str());
+    if (ImGui::Button("Save")) {
+      ImGui::CloseCurrentPopup();
+      if (untitled_ || documentPath_.empty()) {
+        showSaveAs_ = true;  // the action runs once saved
+      } else if (save(documentPath_) && pendingAction_) {
+        auto action = std::move(pendingAction_);
+        pendingAction_ = nullptr;
+        action();
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Discard")) {
+      ImGui::CloseCurrentPopup();
+      dirty_ = false;
+      if (pendingAction_) {
+        auto action = std::move(pendingAction_);
+        pendingAction_ = nullptr;
+        action();
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+      pendingAction_ = nullptr;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+}
+
+void Viewer::handleKeys() {
+  ImGuiIO& io = ImGui::GetIO();
+  const bool ctrl = io.KeyCtrl, shift = io.KeyShift;
+  // Query every key each frame so edges are tracked even while a text field has focus.
+  auto pressed = [&](int key) { return keys_.pressed(window_, key); };
+  const bool f = pressed(GLFW_KEY_F), r = pressed(GLFW_KEY_R), home = pressed(GLFW_KEY_HOME), l = pressed(GLFW_KEY_L),
+             s = pressed(GLFW_KEY_S), f12 = pressed(GLFW_KEY_F12), c = pressed(GLFW_KEY_C), o = pressed(GLFW_KEY_O),
+             e = pressed(GLFW_KEY_E), zero = pressed(GLFW_KEY_0), z = pressed(GLFW_KEY_Z), y = pressed(GLFW_KEY_Y),
+             k = pressed(GLFW_KEY_K), q = pressed(GLFW_KEY_Q), left = pressed(GLFW_KEY_LEFT), right = pressed(GLFW_KEY_RIGHT),
+             space = pressed(GLFW_KEY_SPACE);
+  if (io.WantCaptureKeyboard) return;
+  if (ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopup)) return;
+  if (ctrl) {
+    if (z && shift) redo();
+    else if (z) undo();
+    if (y) redo();
+    if (s && shift) showSaveAs_ = true;
+    else if (s) requestSave();
+    if (o) showOpen_ = true;
+    if (q) requestQuit();
+    return;
+  }
+  if (f && haveScene_) frameVolume();
+  if ((r || home) && haveScene_) {
+    edited_.camera = fileScene_.camera;
+    submitEdit();
+  }
+  if (l && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
+  if (f12 || s) screenshot("");
+  if (c) {
+    DisplaySettings d = display_;
+    d.channel = static_cast<ChannelView>((static_cast<int>(d.channel) + 1) % 5);
+    setDisplay(d);
+  }
+  if (e) {  // exposure: E up, Shift+E down
+    DisplaySettings d = display_;
+    d.exposure += shift ? -0.5f : 0.5f;
+    setDisplay(d);
+  }
+  if (k && shift) showSnapshots_ = !showSnapshots_;
+  else if (k && frame_ && !compare_) takeSnapshot();
+  if (!frames_.empty()) {
+    if (left) setFrame(edited_.render.frame - 1);
+    if (right) setFrame(edited_.render.frame + 1);
+    if (space) playing_ = !playing_;
+  }
+  if (zero) canvas_.resetZoom();
+}
+
+}  // namespace candela

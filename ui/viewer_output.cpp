@@ -1,0 +1,165 @@
+// What the viewer writes: screenshots (the PNG as displayed, through OCIO, and the scene-linear EXR
+// with variance and spp layers) and comparison figures.
+#include "viewer_impl.h"
+
+#include "error_chart.h"
+
+#include <ctime>
+#include <fstream>
+
+namespace candela {
+
+namespace fs = std::filesystem;
+
+bool Viewer::writeFigure(const std::string& path) {
+  if (!compFrame_ || compFrame_->panes.empty()) {
+    report("figure: nothing to compare yet");
+    return false;
+  }
+  figureRequest_ = path.empty() ? freshPath(fs::path("screenshots") / (fs::path(scenePath_).stem().string() + "-comparison.png")) : path;
+  return true;
+}
+
+// Reads the panes and their labels back from the frame just drawn (before the swap): the figure is
+// what the window shows. Writes PATH.png, one EXR per pane and the error series as CSV.
+void Viewer::captureFigure() {
+  const std::string path = *figureRequest_;
+  figureRequest_.reset();
+  try {
+    const auto [x, y, w, h] = canvas_.framebufferRect(canvas_.rect());
+    DisplayImage image;
+    image.width = w;
+    image.height = h;
+    std::vector<uint8_t> rows(3 * static_cast<size_t>(w) * h);
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(x, y, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+    image.rgb8.resize(rows.size());
+    for (int row = 0; row < h; ++row)  // GL reads bottom-up
+      std::copy_n(rows.begin() + 3 * static_cast<size_t>(h - 1 - row) * w, 3 * static_cast<size_t>(w),
+                  image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
+    Json panes = Json::array();
+    for (const auto& p : compFrame_->panes) {
+      Json j{{"label", p.label}, {"seconds", p.seconds}, {"last_slice_seconds", p.lastSlice}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
+      if (!p.series.empty()) j["relmse"] = p.series.back().relmse, j["mse"] = p.series.back().mse, j["efficiency"] = p.efficiency();
+      if (p.agreementTested) j["agrees"] = p.agreement.agree;
+      panes.push_back(j);
+    }
+    image.metadata["scene"] = scenePath_;
+    image.metadata["panes"] = panes.dump();
+    image.metadata["settings"] = sceneToJson(edited_).dump();
+    image.metadata["display"] = toJson(colors_.resolve(display_)).dump();
+    if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
+    writeDisplayPng(path, image);
+    const fs::path stem = fs::path(path).replace_extension("");
+    for (const auto& p : compFrame_->panes) {
+      if (!p.film) continue;
+      Image exr;
+      exr.width = p.film->width();
+      exr.height = p.film->height();
+      exr.rgb = p.film->meanImage();
+      exr.metadata = {{"scene", scenePath_}, {"strategy", toJson(p.strategy).dump()}, {"spp", std::to_string(p.film->spp())},
+                      {"time_s", std::to_string(p.seconds)}};
+      writeExr(stem.string() + "-" + p.label + ".exr", exr);
+    }
+    std::ofstream(stem.string() + ".csv") << comparisonCsv(*compFrame_);
+    report("figure: wrote " + path + ", one EXR per pane and " + stem.string() + ".csv");
+    figureDone_ = true;
+  } catch (const std::exception& e) {
+    report(std::string("figure failed: ") + e.what());
+    exitCode_ = 1;
+    figureDone_ = true;
+  }
+}
+
+bool Viewer::screenshot(const std::string& requestedPath) {
+  if (!frame_ || !gl_->outputWidth()) {
+    report("screenshot: no image yet");
+    return false;
+  }
+  std::string pngPath = requestedPath;
+  if (pngPath.empty()) {
+    const std::time_t now = std::time(nullptr);
+    char stamp[32];
+    std::strftime(stamp, sizeof(stamp), "%Y%m%d-%H%M%S", std::localtime(&now));
+    const std::string stem = fs::path(scenePath_).stem().string();
+    pngPath = freshPath(fs::path("screenshots") / (stem + "-" + stamp + ".png"));
+  }
+  const std::string exrPath = fs::path(pngPath).replace_extension(".exr").string();
+  try {
+    if (fs::path(pngPath).has_parent_path()) fs::create_directories(fs::path(pngPath).parent_path());
+    std::map<std::string, std::string> meta;
+    meta["scene"] = scenePath_;
+    // What the GUI tests check besides the pixels: the document, its state and what is compared.
+    meta["document"] = documentPath_;
+    meta["unsaved_edits"] = dirty_ ? "yes" : "no";
+    meta["undo_steps"] = std::to_string(history_.undoSteps());
+    meta["redo_steps"] = std::to_string(history_.redoSteps());
+    meta["frame"] = std::to_string(edited_.render.frame);
+    if (!frames_.empty()) meta["frames"] = std::to_string(frames_.first) + "-" + std::to_string(frames_.last);
+    if (const Snapshot* snap = comparedSnapshot_ ? snapshots_.find(comparedSnapshot_) : nullptr) {
+      meta["compared_snapshot"] = snap->label;
+      meta["compare_mode"] = canvas_.wipe() ? "wipe" : "side by side";
+      meta["wipe_position"] = std::to_string(canvas_.wipePosition());
+    }
+    if (!importSummary_.empty()) meta["opened_volume"] = importSummary_;
+    if (frame_->scene) {
+      meta["strategy"] = toJson(frame_->scene->strategy).dump();
+      SceneDesc shown = *frame_->scene;
+      shown.display = display_;
+      meta["settings"] = sceneToJson(shown).dump();
+    }
+    meta["display"] = toJson(colors_.resolve(display_)).dump();
+    meta["ocio_config"] = colors_.configPath();
+    meta["spp"] = std::to_string(frame_->preview ? 0 : frame_->film.spp());
+    meta["time_s"] = std::to_string(frame_->seconds);
+    meta["rejected_samples"] = std::to_string(frame_->film.rejectedSamples());
+    DisplayImage png;
+    png.width = gl_->outputWidth();
+    png.height = gl_->outputHeight();
+    png.rgb8 = gl_->readOutput();
+    png.metadata = meta;
+    writeDisplayPng(pngPath, png);
+    Image exr;
+    exr = frame_->film.image();  // with the variance and spp layers
+    exr.metadata = meta;
+    writeExr(exrPath, exr);
+    report("screenshot: wrote " + pngPath + " and " + exrPath);
+    // Comparing a snapshot: also the canvas as shown (live | snapshot), read back before the swap.
+    if (comparedSnapshot_) canvasCaptureRequest_ = fs::path(pngPath).replace_extension("").string() + "-compare.png";
+    return true;
+  } catch (const std::exception& e) {
+    report(std::string("screenshot failed: ") + e.what());
+    return false;
+  }
+}
+
+void Viewer::captureCanvas() {
+  const std::string path = *canvasCaptureRequest_;
+  canvasCaptureRequest_.reset();
+  try {
+    const auto [x, y, w, h] = canvas_.framebufferRect(canvas_.rect());
+    DisplayImage image;
+    image.width = w;
+    image.height = h;
+    std::vector<uint8_t> rows(3 * static_cast<size_t>(w) * h);
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(x, y, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+    image.rgb8.resize(rows.size());
+    for (int row = 0; row < h; ++row)  // GL reads bottom-up
+      std::copy_n(rows.begin() + 3 * static_cast<size_t>(h - 1 - row) * w, 3 * static_cast<size_t>(w),
+                  image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
+    if (const Snapshot* snap = snapshots_.find(comparedSnapshot_)) {
+      image.metadata["compared_snapshot"] = snap->label;
+      image.metadata["compare_mode"] = canvas_.wipe() ? "wipe" : "side by side";
+      image.metadata["wipe_position"] = std::to_string(canvas_.wipePosition());
+    }
+    writeDisplayPng(path, image);
+    report("canvas: wrote " + path);
+  } catch (const std::exception& e) {
+    report(std::string("canvas capture failed: ") + e.what());
+  }
+}
+
+}  // namespace candela

@@ -1,0 +1,486 @@
+// The panels: Parameters (generated from the settings structs' visit()), the comparison panel,
+// snapshots, the timeline and the status bar.
+#include "viewer_impl.h"
+
+#include "error_chart.h"
+#include "param_editor.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstdio>
+#include <fstream>
+
+namespace candela {
+
+namespace fs = std::filesystem;
+
+// Each pane's label over its image: strategy, spp, time it got, error and agreement.
+void Viewer::drawPaneLabels() {
+  if (comparedSnapshot_ && frame_ && !compare_) {
+    // Live render against a snapshot: which side is which.
+    ImDrawList* draw = ImGui::GetForegroundDrawList();
+    const ImageCanvas::Rect r = canvas_.rect();
+    const Snapshot* snap = snapshots_.find(comparedSnapshot_);
+    if (canvas_.wipe()) canvas_.drawDivider(draw);
+    const float half = canvas_.wipe() ? r.w : r.w * 0.5f;
+    draw->AddRectFilled(ImVec2(r.x, r.y), ImVec2(r.x + 160, r.y + 24), IM_COL32(0, 0, 0, 150));
+    draw->AddText(ImVec2(r.x + 8, r.y + 4), IM_COL32(255, 255, 255, 255), "live");
+    const std::string label = snap ? "snapshot " + snap->label : "snapshot";
+    const float x = canvas_.wipe() ? r.x + r.w - 260 : r.x + half;
+    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + 260, r.y + 24), IM_COL32(0, 0, 0, 150));
+    draw->AddText(ImVec2(x + 8, r.y + 4), IM_COL32(255, 220, 120, 255), label.c_str());
+    return;
+  }
+  if (!compFrame_) return;
+  ImDrawList* draw = ImGui::GetForegroundDrawList();
+  const ImageCanvas::Rect r = canvas_.rect();
+  const size_t n = compFrame_->panes.size();
+  if (!compFrame_->status.empty())
+    draw->AddText(ImVec2(r.x + 10, r.y + 10), IM_COL32(255, 220, 120, 255), compFrame_->status.c_str());
+  const bool wipe = canvas_.wipe() && n == 2;
+  if (wipe) canvas_.drawDivider(draw);
+  for (size_t i = 0; i < n; ++i) {
+    const PaneState& p = compFrame_->panes[i];
+    const float x = wipe ? (i == 0 ? r.x : r.x + r.w * 0.5f) : r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
+    char line[256];
+    std::snprintf(line, sizeof(line), "%s  %d spp  %.2f s", p.label.c_str(), p.film ? p.film->spp() : 0, p.seconds);
+    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + r.w / n, r.y + 40), IM_COL32(0, 0, 0, 150));
+    if (wipe && i == 1) draw->AddText(ImVec2(x + r.w / n - 60, r.y + 3), paneColor(i), "(right)");
+    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, r.y + 3), paneColor(i), line);
+    std::string second;
+    if (!p.series.empty()) {
+      char e[96];
+      std::snprintf(e, sizeof(e), "relMSE %.3g  eff %.3g  ", p.series.back().relmse, p.efficiency());
+      second = e;
+    }
+    ImU32 agreeColor = IM_COL32(170, 170, 170, 255);
+    if (!p.agreementTested && n > 1) second += "agreement from " + std::to_string(kAgreementMinSpp) + " spp";
+    if (p.agreementTested) {
+      second += p.agreement.agree ? "agrees" : "DISAGREES";
+      agreeColor = p.agreement.agree ? IM_COL32(130, 220, 130, 255) : IM_COL32(255, 80, 70, 255);
+    }
+    draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, second.c_str());
+    if (i > 0 && !wipe) draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(20, 20, 20, 255), 2.0f);
+  }
+}
+
+void Viewer::drawComparisonPanel() {
+  if (!ImGui::CollapsingHeader("Comparison", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  if (!compFrame_) {
+    ImGui::TextDisabled("starting...");
+    return;
+  }
+  for (size_t i = 0; i < compFrame_->panes.size(); ++i) {
+    const PaneState& p = compFrame_->panes[i];
+    ImGui::TextColored(ImColor(paneColor(i)).Value, "%-13s", p.label.c_str());
+    ImGui::SameLine();
+    if (!p.series.empty())
+      ImGui::Text("%6.2f s %5d spp  MSE %.3g  relMSE %.3g  eff %.3g", p.seconds, p.series.back().spp, p.series.back().mse,
+                  p.series.back().relmse, p.efficiency());
+    else
+      ImGui::Text("%6.2f s %5d spp", p.seconds, p.film ? p.film->spp() : 0);
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Efficiency = 1 / (relMSE x time).\n%s\nAgreement: %s (largest |z| %.2f vs threshold %.2f over %d region tests%s%s)",
+                        kRelMseFormula, !p.agreementTested ? "not tested yet" : (p.agreement.agree ? "agrees" : "DISAGREES"),
+                        p.agreement.maxAbsZ, p.agreement.threshold, p.agreement.tests, p.agreement.worst.empty() ? "" : "; worst ",
+                        p.agreement.worst.c_str());
+  }
+  drawErrorChart(*compFrame_, ImVec2(ImGui::GetContentRegionAvail().x, 200.0f));
+  // Each pane's strategy: a preset plus any edits, generated like the single view's Strategy panel.
+  bool restart = false;
+  int remove = -1;
+  for (size_t i = 0; i < paneSpecs_.size(); ++i) {
+    ImGui::PushID(static_cast<int>(i));
+    const bool open = ImGui::TreeNodeEx("pane", 0, "pane %zu: %s", i + 1, paneSpecs_[i].label.c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("This pane's strategy settings; any edit restarts every pane (equal time)");
+    if (open) {
+      ParamEditor editor;
+      editor.choices["preset"] = strategyPresetNames();
+      paneSpecs_[i].strategy.visit(editor);
+      if (!editor.presetChosen.empty()) paneSpecs_[i].strategy = strategyPreset(editor.presetChosen);
+      if (editor.changed) {
+        paneSpecs_[i].label = paneSpecs_[i].strategy.preset + (toJson(paneSpecs_[i].strategy) == toJson(strategyPreset(paneSpecs_[i].strategy.preset)) ? "" : "*");
+        restart = true;
+      }
+      if (paneSpecs_.size() > 1 && ImGui::Button("Remove pane")) remove = static_cast<int>(i);
+      ImGui::TreePop();
+    }
+    ImGui::PopID();
+  }
+  if (remove >= 0) paneSpecs_.erase(paneSpecs_.begin() + remove), restart = true;
+  if (paneSpecs_.size() < 4 && ImGui::Button("Add pane")) {
+    paneSpecs_.push_back({"emission", strategyPreset("emission")});
+    restart = true;
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Up to four panes; each starts as the emission preset");
+  {
+    const char* views[] = {"image", "absolute error", "relative error"};
+    int view = static_cast<int>(paneView_);
+    if (ImGui::Combo("pane view", &view, views, 3)) {
+      paneView_ = static_cast<PaneView>(view);
+      applyDisplay();
+      uploadPanes();
+    }
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Error views need a reference. False colour, log scale 0.01 (black) to 10 (white):\n"
+                        "absolute |I - R| / mean(R); relative |I - R| / sqrt(R^2 + eps), eps as in relMSE");
+    ImGui::InputText("reference EXR", &referenceInput_);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Path of a scene-linear EXR of this scene and camera, at the panes' resolution");
+    ImGui::SameLine();
+    if (ImGui::Button("Load")) {
+      try {
+        reference_ = readExr(referenceInput_);
+        restartComparison();
+      } catch (const std::exception& e) {
+        report(e.what());
+      }
+    }
+    ImGui::DragInt("reference spp", &referenceSppInput_, 4.0f, 1, 1 << 20, "%d", ImGuiSliderFlags_AlwaysClamp);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Render a reference at this spp before the panes restart; cached on disk by scene and settings hash");
+    if (ImGui::BeginCombo("reference strategy", referenceStrategyInput_.c_str())) {
+      for (const auto& name : strategyPresetNames())
+        if (ImGui::Selectable(name.c_str(), name == referenceStrategyInput_)) referenceStrategyInput_ = name;
+      ImGui::EndCombo();
+    }
+    if (ImGui::Button("Render reference")) {
+      reference_ = Image();
+      options_.referenceSpp = referenceSppInput_;
+      options_.referenceStrategy = referenceStrategyInput_;
+      restartComparison();
+    }
+  }
+  if (paneSpecs_.size() == 2) {
+    ImGui::SameLine();
+    bool wipe = canvas_.wipe();
+    if (ImGui::Checkbox("Wipe", &wipe)) canvas_.setWipe(wipe);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Show both panes in one frame, split by a divider you drag on the image");
+  } else {
+    canvas_.setWipe(false);
+  }
+  if (restart) {
+    paneGl_.clear();
+    paneDirty_.clear();
+    restartComparison();
+  }
+  if (ImGui::Button("Export CSV")) {
+    const std::string path = freshPath(fs::path("screenshots") / (fs::path(scenePath_).stem().string() + "-comparison.csv"));
+    std::error_code ec;
+    fs::create_directories("screenshots", ec);
+    std::ofstream(path) << comparisonCsv(*compFrame_);
+    report("wrote " + path);
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Save figure")) writeFigure("");
+  ImGui::SameLine();
+  if (ImGui::Button("Restart")) restartComparison();
+}
+
+void Viewer::drawPanel() {
+  int ww, wh;
+  glfwGetWindowSize(window_, &ww, &wh);
+  ImGui::SetNextWindowPos(ImVec2(ww - panelWidth_, menuHeight_));
+  ImGui::SetNextWindowSize(ImVec2(panelWidth_, wh - menuHeight_ - statusHeight_ - timelineHeight_));
+  ImGui::Begin("Parameters", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushItemWidth(-170.0f);
+
+  if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ParamEditor editor;
+    editor.choices["display"] = colors_.displays();
+    editor.choices["view"] = colors_.views(display_.display);
+    std::vector<std::string> looks{""};
+    for (const auto& l : colors_.looks()) looks.push_back(l);
+    editor.choices["look"] = looks;
+    DisplaySettings d = display_;
+    d.visit(editor);
+    if (editor.changed) setDisplay(d, "panel");
+    if (!importSummary_.empty()) {
+      ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
+      ImGui::TextWrapped("Opened as a volume: %s", importSummary_.c_str());
+      ImGui::PopStyleColor();
+    }
+  }
+  if (!compare_ && ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ParamEditor editor;
+    limits_.visit(editor);
+    if (editor.changed) session_.setLimits(limits_);
+    if (ImGui::Button("Restart")) beginLatency(session_.edit(edited_));
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Discard the accumulated samples and start again");
+  }
+  if (!haveScene_) {
+    ImGui::TextWrapped(session_.loading() ? "Loading..." : "No scene. File > Open.");
+    ImGui::End();
+    return;
+  }
+  bool changed = false;
+  if (compare_) drawComparisonPanel();
+  if (!compare_ && ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ParamEditor editor;
+    editor.choices["preset"] = strategyPresetNames();
+    edited_.strategy.visit(editor);
+    if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
+    changed |= editor.changed;
+  }
+  if (ImGui::CollapsingHeader("Render")) {
+    ParamEditor editor;
+    edited_.render.visit(editor);
+    changed |= editor.changed;
+  }
+  if (ImGui::CollapsingHeader("Camera")) {
+    ParamEditor editor;
+    edited_.camera.visit(editor);
+    changed |= editor.changed;
+  }
+  auto list = [&](const char* title, auto& items, auto label) {
+    if (!ImGui::CollapsingHeader(title, ImGuiTreeNodeFlags_DefaultOpen)) return;
+    for (size_t i = 0; i < items.size(); ++i) {
+      ImGui::PushID(static_cast<int>(i));
+      if (ImGui::TreeNodeEx(label(items[i], i).c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
+        ParamEditor editor;
+        items[i].visit(editor);
+        changed |= editor.changed;
+        ImGui::TreePop();
+      }
+      ImGui::PopID();
+    }
+  };
+  list("Volumes", edited_.volumes, [](const VolumeDesc& v, size_t i) { return v.name.empty() ? "volume " + std::to_string(i) : v.name; });
+  list("Lights", edited_.lights, [](const LightDesc& l, size_t i) { return std::to_string(i) + ": " + enumName(l.type); });
+  list("Surfaces", edited_.surfaces, [](const SurfaceDesc& s, size_t i) { return std::to_string(i) + ": " + enumName(s.type); });
+  ImGui::PopItemWidth();
+  ImGui::End();
+  if (changed) submitEdit("panel");
+}
+
+void Viewer::drawStatusBar() {
+  int ww, wh;
+  glfwGetWindowSize(window_, &ww, &wh);
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  statusHeight_ = 3.0f * line + 2.0f * ImGui::GetStyle().WindowPadding.y;
+  ImGui::SetNextWindowPos(ImVec2(0.0f, wh - statusHeight_));
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(ww), statusHeight_));
+  ImGui::Begin("Status", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoScrollbar |
+                   ImGuiWindowFlags_NoSavedSettings);
+  double fps = 0.0;
+  if (frameTimes_.size() > 1) fps = (frameTimes_.size() - 1) / (frameTimes_.back() - frameTimes_.front());
+  if (frame_) {
+    const Film& film = frame_->film;
+    char latency[32] = "-";
+    if (!latencies_.empty()) std::snprintf(latency, sizeof(latency), "%.0f ms", lastLatencyMs_);
+    ImGui::Text("%s%s | %s | %dx%d | %d spp%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %s | UI %.0f fps%s",
+                dirty_ ? "* " : "", (documentPath_.empty() ? scenePath_ : documentPath_).c_str(), frame_->scene ? frame_->scene->strategy.preset.c_str() : "", frame_->width, frame_->height,
+                frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
+                frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
+                session_.loading() ? " | loading..." : "");
+    if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) {
+      ImGui::SameLine();
+      ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "| WARNING: %s", w.c_str());
+    }
+  } else if (compare_) {
+    ImGui::Text("%s | equal-time comparison of %d strategies%s | UI %.0f fps", scenePath_.c_str(), paneCount(),
+                compFrame_ && !compFrame_->status.empty() ? (" | " + compFrame_->status).c_str() : "", fps);
+  } else {
+    ImGui::Text("%s | %s", scenePath_.c_str(), session_.loading() ? "loading..." : "no image");
+  }
+  // Pixel readout: scene-linear values under the cursor (or at the locked pixel).
+  int px = -1, py = -1;
+  if (frame_ && canvas_.readoutPixel(frame_->width, frame_->height, px, py)) {
+    const Film& film = frame_->film;
+    const int fx = px * film.width() / frame_->width, fy = py * film.height() / frame_->height;
+    const Rgb m = film.mean(fx, fy), se = film.standardError(fx, fy);
+    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", m.r,
+                m.g, m.b, se.r, se.g, se.b, film.spp());
+  } else {
+    ImGui::TextDisabled("pixel readout: hover the image (L locks)");
+  }
+  // The newest message stays visible for 10 seconds; Help > Messages keeps them all.
+  if (!messages_.empty() && secondsSince(messages_.back().second) < 10.0)
+    ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.35f, 1.0f), "%s", messages_.back().first.c_str());
+  ImGui::End();
+
+  if (showMessages_) {
+    ImGui::SetNextWindowSize(ImVec2(700, 300), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Messages", &showMessages_))
+      for (const auto& m : messages_) ImGui::TextWrapped("%s", m.first.c_str());
+    ImGui::End();
+  }
+}
+
+// --- snapshots ---
+
+namespace {
+
+GLuint uploadThumbnail(const Snapshot& s) {
+  GLuint tex = 0;
+  glGenTextures(1, &tex);
+  glBindTexture(GL_TEXTURE_2D, tex);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, s.thumbWidth, s.thumbHeight, 0, GL_RGB, GL_UNSIGNED_BYTE, s.thumbnail.data());
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  return tex;
+}
+
+}  // namespace
+
+void Viewer::takeSnapshot() {
+  if (!frame_ || frame_->preview || frame_->film.spp() == 0) {
+    report("snapshot: no image yet");
+    return;
+  }
+  try {
+    const Snapshot& s = snapshots_.add(frame_->film.image(), lookState(), frame_->film.spp(),
+                                       frame_->scene ? frame_->scene->strategy.preset : edited_.strategy.preset);
+    thumbnails_[s.id] = uploadThumbnail(s);
+    showSnapshots_ = true;
+    report("snapshot " + s.label + " kept in " + s.path);
+  } catch (const std::exception& e) {
+    report(std::string("snapshot failed: ") + e.what());
+  }
+}
+
+void Viewer::compareSnapshot(int id) {
+  const Snapshot* s = snapshots_.find(id);
+  if (!s) {
+    comparedSnapshot_ = 0;
+    return;
+  }
+  if (!snapshotGl_) snapshotGl_ = std::make_unique<GlDisplay>();
+  snapshotGl_->setPipeline(colors_, display_);
+  snapshotGl_->uploadImage(s->image.width, s->image.height, s->image.rgb);
+  snapshotDirty_ = true;
+  comparedSnapshot_ = id;
+}
+
+void Viewer::drawSnapshots() {
+  if (!showSnapshots_ || compare_) return;
+  ImGui::SetNextWindowSize(ImVec2(420, 460), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowPos(ImVec2(20, menuHeight_ + 20), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Snapshots", &showSnapshots_)) {
+    ImGui::End();
+    return;
+  }
+  if (ImGui::Button("Snapshot (K)")) takeSnapshot();
+  ImGui::SameLine();
+  if (comparedSnapshot_) {
+    bool wipe = canvas_.wipe();
+    if (ImGui::Checkbox("Wipe", &wipe)) canvas_.setWipe(wipe);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("On: live left of a divider you drag, snapshot right of it. Off: side by side");
+    ImGui::SameLine();
+    if (ImGui::Button("Stop comparing")) comparedSnapshot_ = 0;
+  }
+  ImGui::TextDisabled("Kept on disk in %s", snapshots_.directory().c_str());
+  int remove = 0;
+  for (auto it = snapshots_.snapshots().rbegin(); it != snapshots_.snapshots().rend(); ++it) {
+    const Snapshot& s = *it;
+    ImGui::PushID(s.id);
+    ImGui::Separator();
+    if (!thumbnails_.count(s.id)) thumbnails_[s.id] = uploadThumbnail(s);
+    const float w = 120.0f, h = w * static_cast<float>(s.thumbHeight) / static_cast<float>(std::max(1, s.thumbWidth));
+    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(thumbnails_[s.id])), ImVec2(w, h));
+    ImGui::SameLine();
+    ImGui::BeginGroup();
+    ImGui::Text("%s%s", s.label.c_str(), s.id == comparedSnapshot_ ? "  (compared)" : "");
+    if (ImGui::Button("Compare")) {
+      compareSnapshot(s.id);
+      canvas_.setWipe(true);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Side by side")) {
+      compareSnapshot(s.id);
+      canvas_.setWipe(false);
+    }
+    if (ImGui::Button("Restore settings")) {
+      restoreLook(s.look, "restore snapshot");
+      recordEdit();
+    }
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Make this snapshot's scene and display settings the current ones (undoable)");
+    ImGui::SameLine();
+    if (ImGui::Button("Delete")) remove = s.id;
+    ImGui::EndGroup();
+    ImGui::PopID();
+  }
+  if (snapshots_.snapshots().empty()) ImGui::TextWrapped("No snapshots yet. K keeps the current image and its settings.");
+  ImGui::End();
+  if (remove) {
+    if (thumbnails_.count(remove)) glDeleteTextures(1, &thumbnails_[remove]), thumbnails_.erase(remove);
+    if (comparedSnapshot_ == remove) comparedSnapshot_ = 0;
+    snapshots_.remove(remove);
+  }
+}
+
+// --- the timeline ---
+
+void Viewer::setFrame(int frame) {
+  if (frames_.empty() || !haveScene_) return;
+  if (frame > frames_.last) frame = frames_.first;  // wraps, as a looping flipbook does
+  if (frame < frames_.first) frame = frames_.last;
+  if (frame == edited_.render.frame) return;
+  edited_.render.frame = frame;
+  frameStepStart_ = ViewerClock::now();
+  frameLatencyPending_ = true;
+  submitEdit("frame");
+}
+
+void Viewer::pollTimeline() {
+  if (frames_.empty() || !frame_ || !frame_->scene) return;
+  const bool current = frame_->scene->render.frame == edited_.render.frame && !frame_->preview && frame_->film.spp() > 0 && !session_.loading();
+  if (!current) return;
+  if (frameLatencyPending_) {
+    frameLatencyPending_ = false;
+    lastFrameStepMs_ = 1000.0 * secondsSince(frameStepStart_);
+    std::printf("frame %d: first image %.0f ms after the step\n", edited_.render.frame, lastFrameStepMs_);
+    std::fflush(stdout);
+  }
+  // The next frame's grids load in the background while this one renders.
+  if (!prefetcher_) prefetcher_ = std::make_unique<FramePrefetcher>();
+  SceneDesc next = edited_;
+  next.render.frame = edited_.render.frame + 1 > frames_.last ? frames_.first : edited_.render.frame + 1;
+  static int prefetched = INT_MIN;
+  if (prefetched != next.render.frame && !prefetcher_->busy()) {
+    prefetched = next.render.frame;
+    prefetcher_->prefetch(next);
+  }
+  if (playing_ && frame_->film.spp() >= playSpp_) setFrame(next.render.frame);
+}
+
+void Viewer::drawTimeline() {
+  if (frames_.empty() || compare_) {
+    timelineHeight_ = 0.0f;
+    return;
+  }
+  int ww, wh;
+  glfwGetWindowSize(window_, &ww, &wh);
+  timelineHeight_ = ImGui::GetFrameHeightWithSpacing() + 2.0f * ImGui::GetStyle().WindowPadding.y;
+  ImGui::SetNextWindowPos(ImVec2(0.0f, wh - statusHeight_ - timelineHeight_));
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(ww), timelineHeight_));
+  ImGui::Begin("Timeline", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoScrollbar |
+                   ImGuiWindowFlags_NoSavedSettings);
+  if (ImGui::Button("|<")) setFrame(frames_.first);
+  ImGui::SameLine();
+  if (ImGui::Button("<")) setFrame(edited_.render.frame - 1);
+  ImGui::SameLine();
+  if (ImGui::Button(playing_ ? "Pause" : "Play")) playing_ = !playing_;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Renders each frame to the spp on the right, then steps (Space)");
+  ImGui::SameLine();
+  if (ImGui::Button(">")) setFrame(edited_.render.frame + 1);
+  ImGui::SameLine();
+  if (ImGui::Button(">|")) setFrame(frames_.last);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(static_cast<float>(ww) - 560.0f);
+  int frame = edited_.render.frame;
+  if (ImGui::SliderInt("##frame", &frame, frames_.first, frames_.last, "frame %d") && frame != edited_.render.frame) setFrame(frame);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(90.0f);
+  ImGui::DragInt("spp per frame", &playSpp_, 1.0f, 1, 1 << 16);
+  ImGui::SameLine();
+  if (lastFrameStepMs_ > 0.0)
+    ImGui::TextDisabled("%d frames, step %.0f ms", frames_.count, lastFrameStepMs_);
+  else
+    ImGui::TextDisabled("%d frames", frames_.count);
+  ImGui::End();
+}
+
+}  // namespace candela
