@@ -1,5 +1,5 @@
 // candela-cli: batch rendering, equal-time benchmarking and volume generation.
-//   candela-cli render SCENE.json|VOLUME.vdb -o OUT.exr|OUT.png [--spp N | --time S] [--seed N] [--threads N] [--up auto|y|z]
+//   candela-cli render SCENE.json|VOLUME.vdb -o OUT.exr|OUT.png [--spp N | --time S] [--seed N] [--threads N] [--up auto|y|z] [--frames A-B]
 //                      [--strategy PRESET] [--set key=value ...]
 //   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
 //                     [--sweep KEY=V1,V2,...]
@@ -11,6 +11,7 @@
 #include "procedural.h"
 #include "renderer.h"
 #include "scene.h"
+#include "sequence.h"
 #include "vdb_import.h"
 
 #include "report.h"
@@ -53,16 +54,8 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
   return scene;
 }
 
-int render(const std::string& scenePath, const std::string& out, int spp, double seconds, int seed, int threads,
-           const std::string& preset, const std::vector<std::string>& sets, const VdbImportOptions& import) {
-  std::vector<std::string> all = sets;
-  if (seed >= 0) all.insert(all.begin(), "render.seed=" + std::to_string(seed));
-  VdbImportReport imported;
-  SceneDesc desc = loadSceneOrVdb(scenePath, all, preset, import, &imported);
-  if (isVdbPath(scenePath)) std::printf("%s: opened as a volume: %s\n", scenePath.c_str(), imported.summary().c_str());
-  if (spp > 0) desc.render.spp = spp;
-  if (seconds > 0.0) desc.render.time_s = static_cast<float>(seconds);
-  else if (spp > 0) desc.render.time_s = 0.0f;
+// Renders `desc` and writes `out`; returns the render seconds.
+double renderOne(const SceneDesc& desc, const std::string& scenePath, const std::string& out, int threads, bool quiet) {
   const auto loadStart = std::chrono::steady_clock::now();
   auto scene = buildScene(desc);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
@@ -74,6 +67,7 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   image.metadata["settings"] = sceneToJson(desc).dump();
   image.metadata["spp"] = std::to_string(film.spp());
   image.metadata["seconds"] = std::to_string(t);
+  image.metadata["frame"] = std::to_string(desc.render.frame);
   image.metadata["rejected_samples"] = std::to_string(film.rejectedSamples());
   // A PNG is display-referred: the scene's exposure, or for an opened VDB one that shows the volume.
   float exposure = desc.display.exposure;
@@ -81,17 +75,71 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   image.metadata["exposure"] = std::to_string(exposure);
   const std::filesystem::path parent = std::filesystem::path(out).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
-  if (isVdbPath(out)) throw InputError(out + ": expected an output image (.exr or .png), got a .vdb (the input would be overwritten?)");
   if (std::filesystem::path(out).extension() == ".png")
     writePng(out, image, exposure);
   else
     writeImage(out, image);
-  const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
-  std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples\n",
-              scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
-              paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()));
+  if (!quiet) {
+    const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
+    std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples\n",
+                scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
+                paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()));
+    std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
+  }
   if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) std::fprintf(stderr, "warning: %s: %s\n", scenePath.c_str(), w.c_str());
-  std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
+  return loadSeconds + t;
+}
+
+// "A-B" (or "A") as an inclusive frame range.
+std::pair<int, int> parseFrames(const std::string& text) {
+  int a = 0, b = 0;
+  char dash = 0;
+  char rest = 0;
+  const int n = std::sscanf(text.c_str(), "%d%c%d%c", &a, &dash, &b, &rest);
+  if (n == 1) return {a, a};
+  if (n == 3 && dash == '-' && b >= a && b - a < 1000000) return {a, b};
+  throw InputError("--frames: expected A-B with A <= B (e.g. 1-48), got \"" + text + "\"");
+}
+
+int render(const std::string& scenePath, const std::string& out, int spp, double seconds, int seed, int threads,
+           const std::string& preset, const std::vector<std::string>& sets, const VdbImportOptions& import, const std::string& framesText) {
+  std::vector<std::string> all = sets;
+  if (seed >= 0) all.insert(all.begin(), "render.seed=" + std::to_string(seed));
+  VdbImportReport imported;
+  SceneDesc desc = loadSceneOrVdb(scenePath, all, preset, import, &imported);
+  if (isVdbPath(scenePath)) std::printf("%s: opened as a volume: %s\n", scenePath.c_str(), imported.summary().c_str());
+  if (isVdbPath(out)) throw InputError(out + ": expected an output image (.exr or .png), got a .vdb");
+  if (spp > 0) desc.render.spp = spp;
+  if (seconds > 0.0) desc.render.time_s = static_cast<float>(seconds);
+  else if (spp > 0) desc.render.time_s = 0.0f;
+  if (framesText.empty()) {
+    renderOne(desc, scenePath, out, threads, false);
+    return 0;
+  }
+  // A numbered sequence: OUT's own pattern (out.####.exr), else .#### before the extension.
+  const auto [first, last] = parseFrames(framesText);
+  std::string pattern = out;
+  if (!hasFramePattern(out)) {
+    const std::filesystem::path p(out);
+    pattern = (p.parent_path() / (p.stem().string() + ".####" + p.extension().string())).string();
+  }
+  const int count = last - first + 1;
+  const auto start = std::chrono::steady_clock::now();
+  for (int f = first; f <= last; ++f) {
+    SceneDesc frame = desc;
+    frame.render.frame = f;
+    const std::string path = substituteFrame(pattern, f);
+    renderOne(frame, scenePath, path, threads, true);
+    // A progress bar on stderr (stdout stays one line per frame, for logs).
+    const int done = f - first + 1;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int width = 30, filled = done * width / count;
+    std::fprintf(stderr, "\r[%s%s] %d/%d frames, %.1f s elapsed, %.1f s left ", std::string(static_cast<size_t>(filled), '#').c_str(),
+                 std::string(static_cast<size_t>(width - filled), '.').c_str(), done, count, elapsed, elapsed / done * (count - done));
+    std::printf("frame %d: wrote %s\n", f, std::filesystem::absolute(path).string().c_str());
+    std::fflush(stdout);
+  }
+  std::fprintf(stderr, "\n");
   return 0;
 }
 
@@ -252,7 +300,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   std::string scenePath, out, preset, refPath, strategies, times, refStrategy = "conventional";
-  std::string upAxis = "auto";
+  std::string upAxis = "auto", framesText;
   VdbImportOptions importOptions;
   std::vector<std::string> sets;
   int spp = 0, seed = -1, threads = 0, refSpp = 1024;
@@ -271,6 +319,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   r->add_option("--up", upAxis, "For a .vdb: its up axis, auto (Z when Blender wrote it), y or z")->check(CLI::IsMember({"auto", "y", "z"}));
   r->add_flag("!--no-light-rig", importOptions.light_rig, "For a .vdb: no default sun and sky");
+  r->add_option("--frames", framesText, "Render frames A-B of a sequence (volume files with fire.####.vdb patterns); OUT gets .#### unless it has a pattern");
   r->add_option("-o,--output", out, "Output image (.exr or .png)")->required();
   auto* sppOpt = r->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
   r->add_option("--time", seconds, "Render for this many seconds instead")->check(finitePositive)->excludes(sppOpt);
@@ -331,7 +380,7 @@ int main(int argc, char** argv) {
     if (rep->parsed()) return runReport(quick, out, threads);
     if (r->parsed()) {
       importOptions.up = upAxis == "z" ? UpAxis::Z : upAxis == "y" ? UpAxis::Y : UpAxis::Auto;
-      return render(scenePath, out, spp, seconds, seed, threads, preset, sets, importOptions);
+      return render(scenePath, out, spp, seconds, seed, threads, preset, sets, importOptions, framesText);
     }
     if (b->parsed()) return bench(scenePath, strategies, times, refPath, refSpp, refStrategy, out, threads, sets, sweep);
     if (ins->parsed()) return inspect(scenePath, pixel, secondarySeed, lightSamples, preset, sets, out);
@@ -345,6 +394,7 @@ int main(int argc, char** argv) {
       GeneratorDesc validated;
       fromJson(j, validated, "generate", "generator");
       const auto t0 = std::chrono::steady_clock::now();
+      if (std::filesystem::path(out).has_parent_path()) std::filesystem::create_directories(std::filesystem::path(out).parent_path());
       writeGeneratedVolume(validated, out);
       std::printf("wrote %s (%s) in %.2f s\n", out.c_str(), genType.c_str(),
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

@@ -186,6 +186,8 @@ SceneDesc saveSceneDesc(const SceneDesc& scene, const std::string& path) {
     v.file = relative.empty() ? target.string() : relative.string();
   }
   const fs::path tmp = fs::path(path + ".saving");
+  std::error_code dirError;
+  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path(), dirError);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw InputError(path + ": cannot write the scene file (" + std::string(std::strerror(errno)) + ")");

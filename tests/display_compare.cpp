@@ -39,6 +39,42 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  // display_compare --halves IMAGE.png: mean 8-bit level of the left and right halves and of the
+  // whole image, and how many distinct levels it holds (a rendered image, not a flat colour).
+  if (argc == 3 && std::string(argv[1]) == "--halves") {
+    try {
+      const DisplayImage image = readDisplayPng(argv[2]);
+      double left = 0.0, right = 0.0;
+      std::map<int, int> levels;
+      for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+          for (int c = 0; c < 3; ++c) {
+            const int v = image.rgb8[3 * (static_cast<size_t>(y) * image.width + x) + c];
+            (x < image.width / 2 ? left : right) += v;
+            ++levels[v];
+          }
+      const double n = 1.5 * image.width * image.height;
+      std::printf("left %.2f right %.2f mean %.2f levels %zu\n", left / n, right / n, 0.5 * (left + right) / n, levels.size());
+      return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 1;
+    }
+  }
+  // display_compare --same-exr A.exr B.exr: the two scene-linear images are identical (same samples).
+  if (argc == 4 && std::string(argv[1]) == "--same-exr") {
+    try {
+      const Image a = readExr(argv[2]), b = readExr(argv[3]);
+      check(a.width == b.width && a.height == b.height, "same size");
+      double worst = 0.0;
+      for (size_t i = 0; i < std::min(a.rgb.size(), b.rgb.size()); ++i) worst = std::max(worst, static_cast<double>(std::abs(a.rgb[i] - b.rgb[i])));
+      check(a.rgb == b.rgb, "identical pixels (largest difference " + std::to_string(worst) + ")");
+      return failures ? 1 : 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 1;
+    }
+  }
   // display_compare --figure FIG.png FIG.csv PANES: the scripted comparison figure has PANES labelled
   // panes with rendered content, equal time shares (to one pass), and a CSV whose spp rises and whose
   // error falls for every pane.

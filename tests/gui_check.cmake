@@ -1,9 +1,37 @@
 # GUI tests under Xvfb, run as a user would: candela starts on a scene, is driven by its scriptable
-# options, takes a screenshot and quits. Arguments: CLI, VIEWER, XVFB_RUN, COMPARE, SCENE, OUT, MODE.
+# options, takes a screenshot and quits. Arguments: CLI, VIEWER, XVFB_RUN, COMPARE, SCENE, OUT, MODE,
+# and BLENDER_VDB (the tool that writes a Blender-like Z-up VDB).
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
 set(XVFB ${XVFB_RUN} -a -s "-screen 0 1500x820x24")
 set(ENV{ASAN_OPTIONS} detect_leaks=0)  # Mesa leaks a few bytes at exit
+
+# The value of KEY in a screenshot's metadata.
+function(metadata image key var)
+  execute_process(COMMAND ${COMPARE} --metadata ${image} ${key} OUTPUT_VARIABLE value RESULT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "no \"${key}\" in the metadata of ${image}")
+  endif()
+  set(${var} "${value}" PARENT_SCOPE)
+endfunction()
+
+function(expect_contains text expected)
+  string(FIND "${text}" "${expected}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "expected \"${expected}\" in: ${text}")
+  endif()
+endfunction()
+
+# Mean 8-bit level of the left half, the right half and the number of distinct levels of a PNG.
+function(halves image left right levels)
+  execute_process(COMMAND ${COMPARE} --halves ${image} OUTPUT_VARIABLE out RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "left ([0-9.]+) right ([0-9.]+) mean [0-9.]+ levels ([0-9]+)")
+    message(FATAL_ERROR "cannot read ${image}")
+  endif()
+  set(${left} ${CMAKE_MATCH_1} PARENT_SCOPE)
+  set(${right} ${CMAKE_MATCH_2} PARENT_SCOPE)
+  set(${levels} ${CMAKE_MATCH_3} PARENT_SCOPE)
+endfunction()
 
 function(run_checked)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 240)
@@ -122,4 +150,126 @@ elseif(MODE STREQUAL "figure")
       message(FATAL_ERROR "missing ${OUT}/figure-${pane}.exr")
     endif()
   endforeach()
+elseif(MODE STREQUAL "open_vdb")
+  # Each shipped generator written to a .vdb and opened cold, then a Blender-like Z-up bake: the
+  # grids are recognised, the camera frames the volume (a rendered image, not sky alone) and the
+  # Z-up file is turned upright.
+  foreach(type constant ramp torch mist cloud plume)
+    run_checked(${CLI} generate ${type} --resolution 32 -o ${OUT}/${type}.vdb)
+    run_checked(${XVFB} ${VIEWER} ${OUT}/${type}.vdb --set camera.resolution=[160,90] --screenshot ${OUT}/${type}.png --after-spp 4 --quit)
+    expect_contains("${LAST_OUTPUT}" "first image:")
+    metadata(${OUT}/${type}.png opened_volume opened)
+    expect_contains("${opened}" "density \"density\"")
+    expect_contains("${opened}" "Y-up")
+    metadata(${OUT}/${type}.png document document)
+    expect_contains("${document}" "${type}.json")
+    halves(${OUT}/${type}.png left right levels)
+    if(levels LESS 12)
+      message(FATAL_ERROR "${type}: the opened volume shows only ${levels} levels: nothing rendered in frame?")
+    endif()
+  endforeach()
+  run_checked(${BLENDER_VDB} ${OUT}/blender_fire.vdb)
+  run_checked(${XVFB} ${VIEWER} ${OUT}/blender_fire.vdb --set camera.resolution=[160,90] --screenshot ${OUT}/blender.png --after-spp 4 --quit)
+  metadata(${OUT}/blender.png opened_volume opened)
+  expect_contains("${opened}" "Z-up")
+  expect_contains("${opened}" "emission grid from \"flame\"")
+  expect_contains("${opened}" "velocity (vec3s)")
+  metadata(${OUT}/blender.png settings settings)
+  string(JSON rotate GET "${settings}" volumes 0 transform rotate_deg 0)
+  if(NOT rotate EQUAL -90)
+    message(FATAL_ERROR "the Z-up file was not turned upright (rotate_deg.x ${rotate})")
+  endif()
+  # Headless, the same: candela-cli render VOLUME.vdb.
+  run_checked(${CLI} render ${OUT}/blender_fire.vdb --spp 4 --set camera.resolution=[160,90] -o ${OUT}/blender-cli.exr)
+  expect_contains("${LAST_OUTPUT}" "Z-up")
+  # Dropped on the window: the same import.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/cloud.vdb --screenshot ${OUT}/dropped.png
+              --after-spp 4 --quit)
+  metadata(${OUT}/dropped.png document document)
+  expect_contains("${document}" "cloud.json")
+elseif(MODE STREQUAL "save")
+  # Edit, save as, reopen: the reopened scene renders the same samples as the edited one.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[160,90] --edit volumes.1.g=0.3
+              --edit display.exposure=1.5 --save-as ${OUT}/looks/look.json --screenshot ${OUT}/edited.png --after-spp 8 --quit)
+  expect_contains("${LAST_OUTPUT}" "saved ${OUT}/looks/look.json")
+  metadata(${OUT}/edited.png unsaved_edits unsaved)
+  metadata(${OUT}/edited.png document document)
+  if(NOT unsaved STREQUAL "no" OR NOT document STREQUAL "${OUT}/looks/look.json")
+    message(FATAL_ERROR "after the save: unsaved edits \"${unsaved}\", document \"${document}\"")
+  endif()
+  file(READ ${OUT}/looks/look.json saved)
+  string(JSON g GET "${saved}" volumes 1 g)
+  string(JSON exposure GET "${saved}" display exposure)
+  if(NOT g MATCHES "^0\\.300" OR NOT exposure EQUAL 1.5)
+    message(FATAL_ERROR "the saved scene lost edits: g ${g}, exposure ${exposure}")
+  endif()
+  run_checked(${XVFB} ${VIEWER} ${OUT}/looks/look.json --screenshot ${OUT}/reopened.png --after-spp 8 --quit)
+  run_checked(${COMPARE} --same-exr ${OUT}/edited.exr ${OUT}/reopened.exr)
+  metadata(${OUT}/reopened.png display display)
+  expect_contains("${display}" "\"exposure\":1.5")
+elseif(MODE STREQUAL "undo")
+  # Two edits, undo both, redo one: the first edit is back, the second is not.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --edit volumes.1.g=0.3 --edit volumes.1.sigma_t_scale=2
+              --undo 2 --redo 1 --screenshot ${OUT}/undo.png --after-spp 4 --quit)
+  metadata(${OUT}/undo.png settings settings)
+  string(JSON g GET "${settings}" volumes 1 g)
+  string(JSON sigma GET "${settings}" volumes 1 sigma_t_scale)
+  metadata(${OUT}/undo.png undo_steps undo_steps)
+  metadata(${OUT}/undo.png redo_steps redo_steps)
+  message("after undo 2, redo 1: g ${g}, sigma_t_scale ${sigma}, ${undo_steps} undo and ${redo_steps} redo steps left")
+  if(NOT g MATCHES "^0\\.300" OR NOT sigma MATCHES "^0\\.100" OR NOT undo_steps EQUAL 1 OR NOT redo_steps EQUAL 1)
+    message(FATAL_ERROR "undo/redo did not restore the expected state")
+  endif()
+elseif(MODE STREQUAL "snapshot")
+  # A snapshot at 4 spp, then the exposure up 3 stops: the wipe shows the brighter live render left
+  # of the divider and the snapshot, as it was seen, right of it.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --snapshot-compare --edit display.exposure=3
+              --screenshot ${OUT}/snap.png --after-spp 4 --quit)
+  metadata(${OUT}/snap-compare.png compare_mode mode)
+  metadata(${OUT}/snap-compare.png compared_snapshot snapshot)
+  expect_contains("${mode}" "wipe")
+  expect_contains("${snapshot}" "#1")
+  halves(${OUT}/snap-compare.png left right levels)
+  message("wipe: live (left) ${left}, snapshot (right) ${right}")
+  if(NOT left GREATER right)
+    message(FATAL_ERROR "the live half (+3 stops) is not brighter than the snapshot half")
+  endif()
+elseif(MODE STREQUAL "timeline")
+  # A 3-frame sequence of 96^3 plumes: open frame 1, step twice; the shown frame is frame 3 and its
+  # samples equal the CLI's render of frame 3.
+  foreach(f 1 2 3)
+    run_checked(${CLI} generate plume --seed ${f} --resolution 96 -o ${OUT}/seq/fire.000${f}.vdb)
+  endforeach()
+  run_checked(${XVFB} ${VIEWER} ${OUT}/seq/fire.0001.vdb --set camera.resolution=[160,90] --frame-steps 2
+              --screenshot ${OUT}/timeline.png --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "timeline: 2 steps")
+  metadata(${OUT}/timeline.png frame frame)
+  metadata(${OUT}/timeline.png frames frames)
+  if(NOT frame EQUAL 3 OR NOT frames STREQUAL "1-3")
+    message(FATAL_ERROR "timeline: shows frame ${frame} of ${frames}, expected 3 of 1-3")
+  endif()
+  run_checked(${CLI} render ${OUT}/seq/fire.0001.vdb --frames 1-3 --spp 4 --set camera.resolution=[160,90] -o ${OUT}/cli/fire.exr)
+  foreach(f 1 2 3)
+    if(NOT EXISTS ${OUT}/cli/fire.000${f}.exr)
+      message(FATAL_ERROR "--frames 1-3 did not write ${OUT}/cli/fire.000${f}.exr")
+    endif()
+  endforeach()
+  run_checked(${COMPARE} ${OUT}/timeline.png ${OUT}/timeline.exr ${OUT}/cli/fire.0003.exr 4)
+elseif(MODE STREQUAL "quit_prompt")
+  # Unsaved edits: Ctrl+Q asks instead of quitting; D (discard) then quits.
+  file(WRITE ${OUT}/drive.sh
+       "${VIEWER} ${SCENE} --set camera.resolution=[160,90] --edit volumes.1.g=0.5 &
+        pid=$!
+        sleep 3
+        xdotool mousemove 400 400 key ctrl+q
+        sleep 1.5
+        if ! kill -0 $pid 2>/dev/null; then echo 'QUIT WITHOUT ASKING'; exit 1; fi
+        echo 'asked before quitting'
+        xdotool key d
+        for i in 1 2 3 4 5 6 7 8 9 10; do sleep 0.5; kill -0 $pid 2>/dev/null || break; done
+        if kill -0 $pid 2>/dev/null; then echo 'STILL RUNNING AFTER DISCARD'; kill $pid; exit 1; fi
+        wait $pid
+")
+  run_checked(${XVFB} sh ${OUT}/drive.sh)
+  expect_contains("${LAST_OUTPUT}" "asked before quitting")
 endif()

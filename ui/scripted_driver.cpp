@@ -173,8 +173,9 @@ void ScriptedDriver::step(Viewer& v) {
     inspectReported_ = true;
   }
   if (!o.screenshotPath.empty() && !screenshotDone_) {
-    const bool ready = (o.afterSpp > 0 && v.frame_->film.spp() >= o.afterSpp) || (o.afterSeconds > 0.0 && v.frame_->seconds >= o.afterSeconds) ||
-                       (o.afterSpp <= 0 && o.afterSeconds <= 0.0);
+    // The image of the newest edit (not the last one before it) at the budget asked for.
+    const bool ready = v.latencyRequest_ == 0 && ((o.afterSpp > 0 && v.frame_->film.spp() >= o.afterSpp) || (o.afterSeconds > 0.0 && v.frame_->seconds >= o.afterSeconds) ||
+                       (o.afterSpp <= 0 && o.afterSeconds <= 0.0));
     if (!ready) return;
     screenshotDone_ = true;
     if (!v.screenshot(o.screenshotPath)) v.exitCode_ = 1;

@@ -109,6 +109,12 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
   }
 }
 
+bool rendersDifferently(const SceneDesc& a, const SceneDesc& b) {
+  Json ja = sceneToJson(a), jb = sceneToJson(b);
+  for (const char* key : {"display", "description"}) ja.erase(key), jb.erase(key);
+  return ja != jb || a.path != b.path;
+}
+
 nlohmann::json Viewer::lookState() const {
   SceneDesc withDisplay = edited_;
   withDisplay.display = display_;
@@ -119,13 +125,15 @@ void Viewer::restoreLook(const nlohmann::json& look, const std::string& what) {
   try {
     SceneDesc desc = parseSceneDesc(look, edited_.path);
     const std::string path = edited_.path;
+    desc.path = path;
+    const bool rendered = rendersDifferently(desc, edited_);
     edited_ = desc;
     edited_.path = path;
     display_ = colors_.resolve(desc.display);
     applyDisplay();
     if (compare_) {
       restartComparison();
-    } else {
+    } else if (rendered) {
       beginLatency(session_.edit(edited_));
     }
     dirty_ = true;
@@ -167,13 +175,14 @@ void Viewer::applySettingEdit(const std::string& assignment) {
     Json doc = sceneToJson(edited_);
     applySetting(doc, assignment, edited_.path + " (edit " + assignment + ")");
     SceneDesc valid = parseSceneDesc(doc, edited_.path);
+    const bool rendered = rendersDifferently(valid, edited_);
     edited_ = valid;
-    recordEdit();
-    if (valid.display.exposure != display_.exposure || toJson(valid.display) != toJson(display_)) {
+    if (toJson(valid.display) != toJson(display_)) {
       display_ = colors_.resolve(valid.display);
       applyDisplay();
     }
-    beginLatency(session_.edit(valid));
+    recordEdit();
+    if (rendered) beginLatency(session_.edit(valid));  // a display edit needs no new samples
   } catch (const std::exception& e) {
     report(std::string("edit rejected: ") + e.what());
   }
@@ -210,14 +219,15 @@ bool Viewer::save(const std::string& path) {
     const SceneDesc saved = saveSceneDesc(desc, path);
     edited_.path = saved.path;
     edited_.volumes = saved.volumes;  // relative paths now relative to the saved file
-    fileScene_ = edited_;
+    fileScene_.path = edited_.path;
+    fileScene_.volumes = edited_.volumes;
     documentPath_ = scenePath_ = path;
     sceneSettings_.clear();
     scenePreset_.clear();
     sceneTime_ = modificationTime(path);  // our own write is not an outside change to reload
     untitled_ = false;
     dirty_ = false;
-    session_.edit(edited_);
+    // The renderer keeps going: the saved scene is the one it renders (only the paths are new).
     history_.amend(lookState());
     updateTitle();
     report("saved " + path);
@@ -290,10 +300,6 @@ void Viewer::applyDisplay() {
     paneGl_[i]->setPipeline(colors_, paneDisplay());
     paneDirty_[i] = true;
   }
-  if (snapshotGl_) {
-    snapshotGl_->setPipeline(colors_, display_);
-    snapshotDirty_ = true;
-  }
 }
 
 void Viewer::pollSession() {
@@ -318,7 +324,13 @@ void Viewer::pollSession() {
     if (full && openLatencyPending_ && !pendingOpen_) {
       openLatencyPending_ = false;
       openStartSeconds_ = secondsSince(openStart_);
-      std::printf("first image: %.0f ms after opening %s (%d spp)\n", 1000.0 * openStartSeconds_, scenePath_.c_str(), latest->film.spp());
+      // The first open is timed from the launch too: what an artist waits for after `candela fire.vdb`.
+      static bool first = true;
+      char launch[64] = "";
+      if (first) std::snprintf(launch, sizeof(launch), "%.0f ms after launch, ", 1000.0 * secondsSince(launchTime()));
+      first = false;
+      std::printf("first image: %s%.0f ms after opening %s (%d spp)\n", launch, 1000.0 * openStartSeconds_, scenePath_.c_str(),
+                  latest->film.spp());
       std::fflush(stdout);
     }
     // Auto exposure on open: from the first image with a few samples, so noise does not decide it.
@@ -559,7 +571,6 @@ int Viewer::run() {
       canvas_.layout({0.0f, menuHeight_, std::max(1.0f, ww - panelWidth_), std::max(1.0f, wh - menuHeight_ - statusHeight_ - timelineHeight_)},
                      imageAspect());
       drawPanel();
-      drawSnapshots();
       inspector_.draw();
       drawDialogs();
       drawPaneLabels();
@@ -651,7 +662,13 @@ int Viewer::run() {
   return exitCode_;
 }
 
+ViewerClock::time_point launchTime() {
+  static const ViewerClock::time_point t = ViewerClock::now();
+  return t;
+}
+
 int runViewer(const ViewerOptions& options) {
+  launchTime();  // the clock the first image is timed from starts before the window opens
   glfwSetErrorCallback([](int code, const char* text) { std::cerr << "candela: GLFW error " << code << ": " << text << "\n"; });
   if (!glfwInit()) {
     std::cerr << "candela: cannot initialise GLFW (is there a display? under CI use xvfb-run -a)\n";

@@ -40,9 +40,13 @@ using ViewerClock = std::chrono::steady_clock;
 inline double secondsSince(ViewerClock::time_point t) { return std::chrono::duration<double>(ViewerClock::now() - t).count(); }
 
 std::string defaultScenePath();
+// When runViewer started (before the window opened).
+ViewerClock::time_point launchTime();
 // A path next to `wanted` that does not exist yet: NAME.png, NAME-2.png, ...
 std::string freshPath(const std::filesystem::path& wanted);
 std::filesystem::file_time_type modificationTime(const std::string& path);
+// Whether two looks render differently (not only in how they are displayed).
+bool rendersDifferently(const SceneDesc& a, const SceneDesc& b);
 
 // Edge-triggered key presses from GLFW (ImGui 1.86 has no named keys for letters).
 class Keys {

@@ -162,7 +162,8 @@ void Viewer::drawDialogs() {
   if (ImGui::BeginPopupModal("Unsaved edits", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::Text("%s has unsaved edits.", documentPath_.empty() ? "The scene" : fs::path(documentPath_).filename().string().c_str());
     ImGui::Text("Save them before you %s?", discardWhat_.c_str());
-    if (ImGui::Button("Save")) {
+    ImGui::TextDisabled("Enter: save, D: discard, Esc: cancel");
+    if (ImGui::Button("Save") || ImGui::IsKeyPressed(GLFW_KEY_ENTER)) {
       ImGui::CloseCurrentPopup();
       if (untitled_ || documentPath_.empty()) {
         showSaveAs_ = true;  // the action runs once saved
@@ -173,7 +174,7 @@ void Viewer::drawDialogs() {
       }
     }
     ImGui::SameLine();
-    if (ImGui::Button("Discard")) {
+    if (ImGui::Button("Discard") || ImGui::IsKeyPressed(GLFW_KEY_D)) {
       ImGui::CloseCurrentPopup();
       dirty_ = false;
       if (pendingAction_) {

@@ -199,6 +199,7 @@ void Viewer::drawPanel() {
       ImGui::PopStyleColor();
     }
   }
+  drawSnapshots();
   if (!compare_ && ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) {
     ParamEditor editor;
     limits_.visit(editor);
@@ -347,20 +348,25 @@ void Viewer::compareSnapshot(int id) {
     return;
   }
   if (!snapshotGl_) snapshotGl_ = std::make_unique<GlDisplay>();
-  snapshotGl_->setPipeline(colors_, display_);
+  // Shown as it was seen: through the snapshot's own display settings (exposure, view, look).
+  DisplaySettings seen = display_;
+  try {
+    if (s->look.contains("display")) fromJson(s->look["display"], seen, s->path, "display");
+  } catch (const std::exception&) {
+    seen = display_;
+  }
+  snapshotGl_->setPipeline(colors_, colors_.resolve(seen));
   snapshotGl_->uploadImage(s->image.width, s->image.height, s->image.rgb);
   snapshotDirty_ = true;
   comparedSnapshot_ = id;
 }
 
+// A section of the Parameters panel (it never covers the image being compared).
 void Viewer::drawSnapshots() {
-  if (!showSnapshots_ || compare_) return;
-  ImGui::SetNextWindowSize(ImVec2(420, 460), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowPos(ImVec2(20, menuHeight_ + 20), ImGuiCond_FirstUseEver);
-  if (!ImGui::Begin("Snapshots", &showSnapshots_)) {
-    ImGui::End();
-    return;
-  }
+  if (compare_) return;
+  ImGui::SetNextItemOpen(showSnapshots_);
+  showSnapshots_ = ImGui::CollapsingHeader("Snapshots");
+  if (!showSnapshots_) return;
   if (ImGui::Button("Snapshot (K)")) takeSnapshot();
   ImGui::SameLine();
   if (comparedSnapshot_) {
@@ -402,7 +408,6 @@ void Viewer::drawSnapshots() {
     ImGui::PopID();
   }
   if (snapshots_.snapshots().empty()) ImGui::TextWrapped("No snapshots yet. K keeps the current image and its settings.");
-  ImGui::End();
   if (remove) {
     if (thumbnails_.count(remove)) glDeleteTextures(1, &thumbnails_[remove]), thumbnails_.erase(remove);
     if (comparedSnapshot_ == remove) comparedSnapshot_ = 0;
