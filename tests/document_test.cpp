@@ -1,0 +1,163 @@
+// The viewer's document machinery, headless: undo/redo grouping, snapshots on disk, frame patterns.
+#include "edit_history.h"
+#include "procedural.h"
+#include "sequence.h"
+#include "snapshot_store.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace candela {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("candela-document-" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(EditHistory, UndoRedoAndDropsRedoOnANewEdit) {
+  EditHistory h;
+  h.reset({{"g", 0}});
+  h.record({{"g", 1}});
+  h.record({{"g", 2}});
+  EXPECT_EQ(*h.undo(), Json({{"g", 1}}));
+  EXPECT_EQ(*h.undo(), Json({{"g", 0}}));
+  EXPECT_FALSE(h.undo());
+  EXPECT_EQ(*h.redo(), Json({{"g", 1}}));
+  h.record({{"g", 5}});  // a new edit after undo: the old future is gone
+  EXPECT_FALSE(h.canRedo());
+  EXPECT_EQ(*h.undo(), Json({{"g", 1}}));
+}
+
+TEST(EditHistory, AGestureIsOneStepAndAnUnchangedStateRecordsNothing) {
+  EditHistory h;
+  h.reset({{"x", 0}});
+  for (int i = 1; i <= 30; ++i) h.record({{"x", i}}, "camera");  // one tumble: 30 moves
+  h.endGroup();
+  h.record({{"x", 30}}, "camera");  // the same state: nothing
+  EXPECT_EQ(h.undoSteps(), 1u);
+  for (int i = 31; i <= 40; ++i) h.record({{"x", i}}, "camera");  // a second tumble
+  EXPECT_EQ(h.undoSteps(), 2u);
+  EXPECT_EQ(*h.undo(), Json({{"x", 30}}));
+  EXPECT_EQ(*h.undo(), Json({{"x", 0}}));
+  // A different group while one is open is a new step.
+  EditHistory k;
+  k.reset({{"a", 0}});
+  k.record({{"a", 1}}, "panel");
+  k.record({{"a", 2}}, "camera");
+  EXPECT_EQ(k.undoSteps(), 2u);
+  // amend changes the current state without a step (auto exposure on open).
+  k.amend({{"a", 3}});
+  EXPECT_EQ(*k.undo(), Json({{"a", 1}}));
+  EXPECT_EQ(*k.redo(), Json({{"a", 3}}));
+}
+
+TEST(EditHistory, KeepsAtMostItsLimit) {
+  EditHistory h(5);
+  h.reset({{"v", 0}});
+  for (int i = 1; i <= 20; ++i) h.record({{"v", i}});
+  EXPECT_EQ(h.undoSteps(), 4u);
+  while (h.canUndo()) h.undo();
+  EXPECT_EQ(*h.redo(), Json({{"v", 17}}));
+}
+
+TEST(Snapshots, KeptOnDiskWithTheirLookAndReadBack) {
+  const fs::path dir = scratch("snapshots");
+  Image image;
+  image.width = 4, image.height = 2;
+  image.rgb.assign(24, 0.25f);
+  image.channels["spp"].assign(8, 16.0f);
+  Json look = {{"display", {{"exposure", 1.0}}}, {"camera", {{"fov_y", 30}}}};
+  SnapshotStore store(dir.string());
+  const Snapshot& a = store.add(image, look, 16, "emission");
+  EXPECT_EQ(a.label, "#1 emission 16 spp");
+  EXPECT_TRUE(fs::exists(a.path));
+  EXPECT_EQ(a.thumbWidth, 4);
+  // 0.25 x 2^1 through sRGB: 0.5 -> 188.
+  EXPECT_EQ(a.thumbnail[0], 188);
+  image.rgb.assign(24, 1.0f);
+  store.add(image, look, 32, "full");
+  SnapshotStore reopened(dir.string());
+  reopened.loadDirectory();
+  ASSERT_EQ(reopened.snapshots().size(), 2u);
+  EXPECT_EQ(reopened.snapshots()[1].label, "#2 full 32 spp");
+  EXPECT_EQ(reopened.snapshots()[0].look, look);
+  EXPECT_EQ(reopened.snapshots()[1].image.rgb, image.rgb);
+  reopened.remove(1);
+  EXPECT_EQ(reopened.snapshots().size(), 1u);
+  EXPECT_FALSE(fs::exists(dir / "snapshot-001.exr"));
+  // The next snapshot after reading the directory does not reuse a number.
+  EXPECT_EQ(reopened.add(image, look, 1, "x").id, 3);
+}
+
+TEST(Sequences, PatternsSubstituteAndFindFramesOnDisk) {
+  EXPECT_TRUE(hasFramePattern("/a/fire.####.vdb"));
+  EXPECT_TRUE(hasFramePattern("fire_$F4.vdb"));
+  EXPECT_TRUE(hasFramePattern("fire.%04d.vdb"));
+  EXPECT_FALSE(hasFramePattern("/a#b/fire.vdb"));  // only the file name holds a pattern
+  EXPECT_EQ(substituteFrame("/a/fire.####.vdb", 7), "/a/fire.0007.vdb");
+  EXPECT_EQ(substituteFrame("fire_$F4.vdb", 12), "fire_0012.vdb");
+  EXPECT_EQ(substituteFrame("fire_$F.vdb", 12), "fire_12.vdb");
+  EXPECT_EQ(substituteFrame("fire.%04d.vdb", 3), "fire.0003.vdb");
+  EXPECT_EQ(substituteFrame("fire.####.vdb", -3), "fire.-0003.vdb");
+  EXPECT_EQ(substituteFrame("fire.####.vdb", 12345), "fire.12345.vdb");
+  EXPECT_EQ(substituteFrame("fire.vdb", 3), "fire.vdb");
+
+  const fs::path dir = scratch("sequence");
+  for (const char* f : {"smoke.0003.vdb", "smoke.0004.vdb", "smoke.0006.vdb", "smoke.0004.vdb.bak", "smoke.00x5.vdb", "smoke.vdb"})
+    std::ofstream(dir / f) << "x";
+  const FrameRange r = findFrames((dir / "smoke.####.vdb").string());
+  EXPECT_EQ(r.first, 3);
+  EXPECT_EQ(r.last, 6);
+  EXPECT_EQ(r.count, 3);
+  std::string pattern;
+  int frame = 0;
+  ASSERT_TRUE(detectSequence((dir / "smoke.0004.vdb").string(), pattern, frame));
+  EXPECT_EQ(pattern, (dir / "smoke.####.vdb").string());
+  EXPECT_EQ(frame, 4);
+  EXPECT_FALSE(detectSequence((dir / "smoke.vdb").string(), pattern, frame));
+}
+
+TEST(Sequences, ASceneRendersTheFrameItNames) {
+  // Two frames that differ (constant densities 1 and 4): render.frame picks the file.
+  const fs::path dir = scratch("frames");
+  for (int f = 1; f <= 2; ++f) {
+    GeneratorDesc gen;
+    gen.type = "constant";
+    gen.resolution = 8;
+    gen.value = f == 1 ? 1.0f : 4.0f;
+    writeGeneratedVolume(gen, (dir / ("box." + std::to_string(f) + ".vdb")).string());
+  }
+  SceneDesc scene = test::loadScene("assets/scenes/test/furnace.json");
+  ASSERT_FALSE(scene.volumes.empty());
+  scene.path = (dir / "scene.json").string();
+  scene.volumes[0].has_generator = false;
+  scene.volumes[0].file = "box.$F.vdb";
+  scene.camera.resolution = {8, 8};
+  EXPECT_EQ(sceneFrames(scene).first, 1);
+  EXPECT_EQ(sceneFrames(scene).last, 2);
+  scene.render.frame = 1;
+  const auto one = Scene::build(scene);
+  scene.render.frame = 2;
+  const auto two = Scene::build(scene);
+  EXPECT_EQ(one->media().media[0]->majorantGrid().maxDensities()[0] * 4.0f, two->media().media[0]->majorantGrid().maxDensities()[0]);
+  scene.render.frame = 9;
+  try {
+    Scene::build(scene);
+    FAIL() << "a missing frame must be an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("box.9.vdb"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace candela
