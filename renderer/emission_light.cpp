@@ -17,26 +17,23 @@ EmissionLight::EmissionLight(const Medium& medium, int cellSize) : medium_(&medi
   const float voxelVolume = std::abs(glm::determinant(glm::mat3(m)));
   cellVolume_ = voxelVolume * layout_.cellExtent.x * layout_.cellExtent.y * layout_.cellExtent.z;
 
-  // Energy per cell: the sum over voxel centres inside it of mu_a * lum(Le) * voxel volume.
+  // Energy per cell: the sum over voxel centres inside it of the source's luminance * voxel volume.
   const IndexBox box = density.activeBox();
   const int depth = box.max.z - box.min.z + 1;
   const int slabs = std::max(1, std::min(16, depth));
   std::vector<std::vector<double>> partial(static_cast<size_t>(slabs), std::vector<double>(layout_.cellCount(), 0.0));
-  const float absorption = medium.sigmaTScale() * (1.0f - medium.albedoAverage());
   tbb::parallel_for(0, slabs, [&](int s) {
     Medium::Sampler sampler(medium);
-    auto voxels = density.sampler();
     std::vector<double>& out = partial[static_cast<size_t>(s)];
     for (int z = box.min.z + depth * s / slabs; z < box.min.z + depth * (s + 1) / slabs; ++z)
       for (int y = box.min.y; y <= box.max.y; ++y)
         for (int x = box.min.x; x <= box.max.x; ++x) {
-          const float d = voxels.voxel(x, y, z);
-          if (!(d > 0.0f)) continue;
-          const float lum = luminance(sampler.emission(Vec3(x, y, z)));
-          if (!(lum > 0.0f)) continue;
+          // mu_a lum(Le) in radiance units, lum(E) per unit length (also where the density is 0).
+          const float source = sampler.sourceLuminanceAtVoxel(x, y, z);
+          if (!(source > 0.0f)) continue;
           const glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor((Vec3(x, y, z) - layout_.origin) / layout_.cellExtent)),
                                           glm::ivec3(0), layout_.res - 1);
-          out[static_cast<size_t>(layout_.cellIndex(c.x, c.y, c.z))] += static_cast<double>(d * absorption * lum) * voxelVolume;
+          out[static_cast<size_t>(layout_.cellIndex(c.x, c.y, c.z))] += static_cast<double>(source) * voxelVolume;
         }
   });
   std::vector<double> energy(layout_.cellCount(), 0.0);

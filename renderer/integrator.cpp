@@ -263,15 +263,22 @@ struct CollisionCoefficients {
 // with `pick` in [0, mu_s) choosing the medium.
 enum class Decision { Continue, Absorb, Scatter };
 
-// Conventional analog events (METHOD.md s.2, the talk's Fig. 1 left): absorb / scatter / null with
-// P = mu_a/mu_bar, mu_s/mu_bar, mu_n/mu_bar; emission is added only at absorption, E[beta Le] with
-// the per-channel mu_a handled by the weight mu_a,rgb / mu_a,avg. A null collision's weight
-// mu_n / (P_n mu_bar) is exactly 1.
+// Conventional analog events (docs/method.md s.2, the talk's Fig. 1 left): absorb / scatter / null
+// with P = mu_a/mu_bar, mu_s/mu_bar, mu_n/mu_bar; emission is added only at absorption, E[beta Le]
+// with the per-channel mu_a handled by the weight mu_a,rgb / mu_a,avg. A null collision's weight
+// mu_n / (P_n mu_bar) is exactly 1. Per-unit-length emission (no mu_a to absorb it) is gathered at
+// every collision, E / mu_bar.
 Decision analogEvent(const Collision& c, const CollisionCoefficients& k, float u, bool emissive, float emissionWeight, Rgb& beta,
                      Rgb& L, float& nullProbability, float& scatterDensity, float& pick) {
   const float x = u * c.muBar;
+  Rgb atAbsorption(0.0f), atCollision(0.0f);
+  if (emissive) {
+    c.emissionSourceByUnits(atAbsorption, atCollision);
+    // Emission per unit length may sit where nothing absorbs: gathered at every collision instead.
+    L += beta * atCollision * (emissionWeight / c.muBar);
+  }
   if (x < k.sigmaA) {
-    if (emissive) L += beta * c.emissionSource() * (emissionWeight / k.sigmaA);
+    if (emissive) L += beta * atAbsorption * (emissionWeight / k.sigmaA);
     return Decision::Absorb;
   }
   pick = x - k.sigmaA;

@@ -20,8 +20,10 @@ Medium::Medium(const VolumeDesc& desc, VoxelGrid density, VoxelGrid temperature,
   albedoAverage_ = average(albedo_);
   if (desc.emission.mode == EmissionMode::Blackbody) aux_ = std::move(temperature);
   if (desc.emission.mode == EmissionMode::Grid) aux_ = std::move(emission);
-  // A volume whose Le is zero everywhere is not an emitter and must cost nothing extra (METHOD.md s.0).
-  emissive_ = aux_.valid() && desc.emission.intensity > 0.0f && albedoAverage_ < 1.0f &&
+  // A volume whose source is zero everywhere is not an emitter and must cost nothing extra
+  // (docs/method.md s.0). In radiance units an albedo of 1 leaves no absorption, hence no source.
+  perLength_ = desc.emission.units == EmissionUnits::PerLength;
+  emissive_ = aux_.valid() && desc.emission.intensity > 0.0f && (perLength_ || albedoAverage_ < 1.0f) &&
               !(desc.emission.mode == EmissionMode::Grid && isBlack(desc.emission.color));
   if (aux_.valid()) {
     auxFromDensityIndex_ = glm::inverse(aux_.worldFromIndex()) * density_.worldFromIndex();
@@ -54,12 +56,10 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
     emissionMaxima_.clear();
   }
   const bool emissionTerm = policy.emission_term && policy.emission_weight > 0.0f && emissive_;
-  if (emissionTerm && emissionMaxima_.empty()) {
+  // Per unit length, emission may sit where mu_t is 0: the majorant needs its maxima whatever the policy.
+  if ((emissionTerm || emitsPerLength()) && emissionMaxima_.empty()) {
     emissionMaxima_ = footprintMaxima(majorant_.layout(), density_.activeBox(), [this] {
-      return [sampler = Sampler(*this), density = density_.sampler()](int x, int y, int z) {
-        const float d = density.voxel(x, y, z);
-        return d > 0.0f ? d * luminance(sampler.emission(Vec3(x, y, z))) : 0.0f;
-      };
+      return [sampler = Sampler(*this)](int x, int y, int z) { return sampler.sourceLuminanceAtVoxel(x, y, z); };
     });
   }
   if (strategy.emission.light_sampling && emissive_) {
@@ -71,19 +71,30 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   // mu_bar = max(maj(mu_t), min(k * maj(mu_a lum(Le)), c / voxel_size)); rounded up by a few ulps so
   // float rounding in the trilinear lerp can never exceed maj(mu_t).
   const float scale = desc_.sigma_t_scale * policy.safety_factor * (1.0f + 4e-7f);
-  const float emissionScale = policy.emission_weight * desc_.sigma_t_scale * (1.0f - albedoAverage_);
+  const float emissionScale = policy.emission_weight;
   // Capped even at c = 0: past about 1000 collisions per voxel a walk would not end (input_limits.h).
   const float cap = (policy.emission_cap > 0.0f ? policy.emission_cap : 1000.0f) / voxelSize_;
   cellMajorant_.resize(majorant_.cellCount());
   for (size_t i = 0; i < cellMajorant_.size(); ++i) {
     float muBar = majorant_.maxDensities()[i] * scale;
     if (emissionTerm) muBar = std::max(muBar, std::min(emissionMaxima_[i] * emissionScale, cap));
+    // Emission per unit length where nothing extinguishes: collisions at rate min(maj(E), c / voxel)
+    // so the emission is gathered (any mu_bar > 0 there keeps it unbiased; this one is cheap).
+    if (!(muBar > 0.0f) && emitsPerLength() && emissionMaxima_[i] > 0.0f) muBar = std::min(emissionMaxima_[i], cap);
     cellMajorant_[i] = muBar;
   }
 }
 
 Medium::Sampler::Sampler(const Medium& m)
     : medium_(&m), density_(m.density_.sampler()), aux_(m.aux_.valid() ? m.aux_.sampler() : m.density_.sampler()) {}
+
+float Medium::Sampler::sourceLuminanceAtVoxel(int x, int y, int z) const {
+  const Medium& m = *medium_;
+  if (!m.emissive_) return 0.0f;
+  if (m.perLength_) return luminance(emission(Vec3(x, y, z)));
+  const float d = density_.voxel(x, y, z);
+  return d > 0.0f ? d * m.desc_.sigma_t_scale * (1.0f - m.albedoAverage_) * luminance(emission(Vec3(x, y, z))) : 0.0f;
+}
 
 Rgb Medium::Sampler::emission(const Vec3& indexPos) const {
   const Medium& m = *medium_;

@@ -1,6 +1,6 @@
 // One heterogeneous medium: its grids (compact NanoVDB form), its parameters and its majorant grid.
-// Coefficients (METHOD.md s.0): mu_t(x) = density(x) * sigma_t_scale (grey), mu_s = albedo * mu_t,
-// mu_a = (1 - albedo) * mu_t, HG phase with g, source term mu_a * Le.
+// Coefficients (docs/method.md s.0): mu_t(x) = density(x) * sigma_t_scale (grey), mu_s = albedo * mu_t,
+// mu_a = (1 - albedo) * mu_t, HG phase with g, source term mu_a * Le (or E per unit length).
 #pragma once
 
 #include "blackbody.h"
@@ -26,6 +26,9 @@ class Medium {
   const Mat4& indexFromWorld() const { return indexFromWorld_; }
   const Mat4& worldFromIndex() const { return worldFromIndex_; }
   bool emissive() const { return emissive_; }
+  // Emission per unit length (EmissionUnits::PerLength): emits where nothing absorbs, so the
+  // majorant keeps collisions there and the analog estimator gathers it at every collision.
+  bool emitsPerLength() const { return emissive_ && perLength_; }
   float sigmaTScale() const { return desc_.sigma_t_scale; }
   const Rgb& albedo() const { return albedo_; }
   float albedoAverage() const { return albedoAverage_; }
@@ -60,8 +63,18 @@ class Medium {
    public:
     explicit Sampler(const Medium& m);
     float sigmaT(const Vec3& indexPos) const { return density_.trilinear(indexPos) * medium_->desc_.sigma_t_scale; }
-    // Le at the point: the radiance the medium emits there (its source term is mu_a * Le).
+    // E at the point: the emission value (Le in radiance units, the source itself per_length).
     Rgb emission(const Vec3& indexPos) const;
+    // The source term at the point (talk Eq. 1), given the medium's sigma_t there: mu_a Le in
+    // radiance units, E whatever the density per_length (docs/conventions.md, "Emission").
+    Rgb source(const Vec3& indexPos, float sigmaT) const {
+      if (medium_->perLength_) return emission(indexPos);
+      if (!(sigmaT > 0.0f)) return Rgb(0.0f);
+      return (Rgb(1.0f) - medium_->albedo_) * sigmaT * emission(indexPos);
+    }
+    // Luminance of the source term at a voxel centre, for majorants and the emission light's cells
+    // (radiance units use the average albedo, as the event probabilities do).
+    float sourceLuminanceAtVoxel(int x, int y, int z) const;
 
    private:
     const Medium* medium_;
@@ -76,6 +89,7 @@ class Medium {
   Mat4 auxFromDensityIndex_{1.0f};
   bool auxSameIndex_ = true;
   bool emissive_ = false;
+  bool perLength_ = false;
   Rgb albedo_{0.0f};
   float albedoAverage_ = 0.0f;
   MajorantGrid majorant_;

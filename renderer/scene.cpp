@@ -152,6 +152,18 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     checkRepresentable(*medium, desc.path + ": " + field, desc.strategy);
     if (medium->majorantGrid().empty() && warnings)
       warnings->push_back(path + ": " + field + ": grid \"" + density + "\" has no active voxels; the volume is empty");
+    if (warnings)
+      for (const std::string& w : emissionWarnings(v)) warnings->push_back(desc.path + ": " + field + ": " + w);
+    // Per unit length the emission grid may reach past the density grid; the renderer tracks the
+    // density grid's box only (docs/conventions.md).
+    if (warnings && v.emission.units == EmissionUnits::PerLength && v.emission.mode == EmissionMode::Grid && grids.size() > 1 &&
+        !grids[1].grid.activeBox().empty() && !grids[0].grid.activeBox().empty()) {
+      const IndexBox e = grids[1].grid.activeBox(), d = grids[0].grid.activeBox();
+      const bool same = grids[1].grid.worldFromIndex() == grids[0].grid.worldFromIndex();
+      if (same && (glm::any(glm::lessThan(e.min, d.min)) || glm::any(glm::greaterThan(e.max, d.max))))
+        warnings->push_back(desc.path + ": " + field + ": the emission grid \"" + v.emission_grid +
+                            "\" reaches outside the density grid's bounding box; emission there is not rendered");
+    }
     medium->setIndex(static_cast<int>(i));
     medium->applyStrategy(desc.strategy);
     scene->hasEmissiveMedia_ |= medium->emissive();

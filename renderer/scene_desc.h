@@ -66,10 +66,27 @@ struct EnumNames<EmissionMode> {
   }
 };
 
-// Le(x): blackbody(temperature * temperature_scale + temperature_offset) * intensity, or
-// emission grid * color * intensity. The source term is mu_a * Le (talk, Eq. 1).
+// How the emission value E(x) below enters the radiative transfer equation (docs/conventions.md):
+// radiance: E is the radiance Le the medium emits; the source term is mu_a Le = (1 - albedo) sigma_t Le
+//   (the talk's Eq. 1, physically based: a medium that does not absorb does not emit, so an albedo of
+//   1 or zero density makes it dark);
+// per_length: E is the source term itself, emitted radiance per unit length, whatever the density and
+//   albedo (Cycles' and Arnold's emission strength, Houdini's emission scale: strength x grid).
+enum class EmissionUnits { Radiance, PerLength };
+template <>
+struct EnumNames<EmissionUnits> {
+  static const std::vector<std::pair<EmissionUnits, const char*>>& get() {
+    static const std::vector<std::pair<EmissionUnits, const char*>> v{{EmissionUnits::Radiance, "radiance"},
+                                                                      {EmissionUnits::PerLength, "per_length"}};
+    return v;
+  }
+};
+
+// E(x): blackbody(temperature * temperature_scale + temperature_offset) * intensity, or
+// emission grid * color * intensity; `units` says whether E is Le (source mu_a Le) or the source.
 struct EmissionDesc {
   EmissionMode mode = EmissionMode::None;
+  EmissionUnits units = EmissionUnits::Radiance;
   float intensity = 1.0f;
   float temperature_scale = 1.0f;   // Kelvin per temperature-grid unit
   float temperature_offset = 0.0f;  // Kelvin added after scaling
@@ -78,9 +95,16 @@ struct EmissionDesc {
   template <class V>
   void visit(V& v) {
     v.field("mode", mode, "none, blackbody (temperature grid) or grid (emission grid x color)");
-    v.field("intensity", intensity, "Multiplies the emitted radiance", kRadianceScale);
-    v.field("temperature_scale", temperature_scale, "Kelvin per temperature-grid unit", Range{0.0, 1e6});
-    v.field("temperature_offset", temperature_offset, "Kelvin added after scaling", Range{-1e5, 1e5});
+    v.field("units", units,
+            "radiance: the value is the radiance Le, emitted as (1 - albedo) sigma_t Le (an albedo of 1 or zero density emits nothing); "
+            "per_length: the value is emitted per unit length whatever the density (Cycles / Arnold emission strength)");
+    v.field("intensity", intensity, "Multiplies the emission (radiance, or radiance per world unit in per_length units)", kRadianceScale);
+    v.field("temperature_scale", temperature_scale,
+            "Blackbody: Kelvin per temperature-grid unit. Kelvin = grid x scale + offset; the colour is Planck's at that temperature "
+            "scaled so 1500 K has luminance 1 (x intensity): 0.00035 at 1000 K (dull red), 60 at 2000 K, 3900 at 3000 K (orange), "
+            "4e5 at 6500 K (white), as physics says. Below about 700 K it is black",
+            Range{0.0, 1e6});
+    v.field("temperature_offset", temperature_offset, "Blackbody: Kelvin added after scaling (the temperature where the grid is 0)", Range{-1e5, 1e5});
     v.field("color", color, "Emission colour (grid mode)", kColour);
   }
 };
@@ -230,6 +254,11 @@ struct SceneDesc {
   std::vector<LightDesc> lights;
   std::vector<SurfaceDesc> surfaces;
 };
+
+// Why a volume that asks to emit would render dark (albedo 1 or black colour in radiance units, zero
+// intensity), one line each; empty when it emits or asks for no emission. Scene::build reports them
+// as warnings and the viewer shows them beside the volume's fields.
+std::vector<std::string> emissionWarnings(const VolumeDesc& volume);
 
 // Reads and validates a scene file. `preset` (when not empty) replaces the file's strategy with that
 // preset; `settings` are --set style edits applied to the JSON after it and before validation, so

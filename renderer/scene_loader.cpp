@@ -173,6 +173,20 @@ Json sceneToJson(const SceneDesc& scene) {
   return doc;
 }
 
+std::vector<std::string> emissionWarnings(const VolumeDesc& v) {
+  std::vector<std::string> out;
+  const EmissionDesc& e = v.emission;
+  if (e.mode == EmissionMode::None) return out;
+  if (!(e.intensity > 0.0f)) out.push_back("emission.intensity is 0: the volume emits nothing");
+  if (e.mode == EmissionMode::Grid && isBlack(e.color)) out.push_back("emission.color is black: the volume emits nothing");
+  if (e.units == EmissionUnits::Radiance && average(v.albedo) >= 1.0f)
+    out.push_back("albedo 1 with emission.units \"radiance\": the source (1 - albedo) sigma_t Le is 0, the volume emits nothing "
+                  "(use units \"per_length\" to emit whatever the albedo)");
+  else if (e.units == EmissionUnits::Radiance && v.sigma_t_scale <= 0.0f)
+    out.push_back("sigma_t_scale 0 with emission.units \"radiance\": nothing absorbs, so nothing emits (use units \"per_length\")");
+  return out;
+}
+
 SceneDesc saveSceneDesc(const SceneDesc& scene, const std::string& path) {
   namespace fs = std::filesystem;
   SceneDesc saved = scene;

@@ -49,13 +49,23 @@ struct Collision {
     for (int i = 0; i < count; ++i) s += track[i]->medium->albedo() * sigmaT[i];
     return s;
   }
-  // Source term sum_i mu_a,i * Le,i (talk Eq. 1), per channel. Non-emissive media cost nothing.
+  // Source term sum_i mu_a,i * Le,i (talk Eq. 1), per channel, with per_length media's E_i.
+  // Non-emissive media cost nothing.
   Rgb emissionSource() const {
     Rgb s(0.0f);
     for (int i = 0; i < count; ++i)
-      if (track[i]->medium->emissive() && sigmaT[i] > 0.0f)
-        s += (Rgb(1.0f) - track[i]->medium->albedo()) * sigmaT[i] * track[i]->sampler.emission(indexPos(i));
+      if (track[i]->medium->emissive()) s += track[i]->sampler.source(indexPos(i), sigmaT[i]);
     return s;
+  }
+  // The source split by how an analog walk can gather it: radiance-unit media at absorption
+  // (their source vanishes where mu_a does), per_length media at every collision.
+  void emissionSourceByUnits(Rgb& atAbsorption, Rgb& atCollision) const {
+    atAbsorption = atCollision = Rgb(0.0f);
+    for (int i = 0; i < count; ++i) {
+      const Medium& m = *track[i]->medium;
+      if (!m.emissive()) continue;
+      (m.emitsPerLength() ? atCollision : atAbsorption) += track[i]->sampler.source(indexPos(i), sigmaT[i]);
+    }
   }
 };
 

@@ -41,6 +41,23 @@ std::string VdbImportReport::summary() const {
   return s;
 }
 
+LightDesc defaultSun() {
+  LightDesc sun;
+  sun.type = LightType::Directional;
+  sun.direction = glm::normalize(Vec3(-0.5f, -0.75f, -0.45f));
+  sun.color = Vec3(1.0f, 0.93f, 0.82f);
+  sun.intensity = 3.0f;
+  return sun;
+}
+
+LightDesc defaultSky() {
+  LightDesc sky;
+  sky.type = LightType::Environment;
+  sky.color = Vec3(0.45f, 0.6f, 0.85f);
+  sky.intensity = 0.25f;
+  return sky;
+}
+
 void frameCamera(CameraDesc& camera, const Vec3& lo, const Vec3& hi, const Vec3& direction) {
   const Vec3 center = 0.5f * (lo + hi);
   const float radius = std::max(1e-4f, 0.5f * glm::length(hi - lo));
@@ -180,18 +197,7 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
   // Three-quarter view from slightly above, as a turntable starts.
   frameCamera(scene.camera, lo, hi, Vec3(0.45f, 0.25f, 1.0f));
 
-  if (options.light_rig) {
-    LightDesc sun;
-    sun.type = LightType::Directional;
-    sun.direction = glm::normalize(Vec3(-0.5f, -0.75f, -0.45f));
-    sun.color = Vec3(1.0f, 0.93f, 0.82f);
-    sun.intensity = 3.0f;
-    LightDesc sky;
-    sky.type = LightType::Environment;
-    sky.color = Vec3(0.45f, 0.6f, 0.85f);
-    sky.intensity = 0.25f;
-    scene.lights = {sun, sky};
-  }
+  if (options.light_rig) scene.lights = {defaultSun(), defaultSky()};
   scene.strategy = strategyPreset(volume.emission.mode == EmissionMode::None ? "conventional" : "emission");
   if (reportOut) *reportOut = report;
   return scene;

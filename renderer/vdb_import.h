@@ -55,6 +55,10 @@ bool isVdbPath(const std::string& path);
 // the file when no density grid is found (listing the grids present).
 SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& options = {}, VdbImportReport* report = nullptr);
 
+// The default light rig: a warm sun from above-left-front and a pale blue sky.
+LightDesc defaultSun();
+LightDesc defaultSky();
+
 // Points the camera at the world box lo..hi from `direction` (from the target toward the camera),
 // far enough that the box's bounding sphere fills the narrower field of view.
 void frameCamera(CameraDesc& camera, const Vec3& lo, const Vec3& hi, const Vec3& direction);

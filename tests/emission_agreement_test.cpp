@@ -61,6 +61,13 @@ void expectAgreement(const std::string& scene, const std::vector<std::string>& b
 
 TEST(EmissionAgreement, GlowBox) { expectAgreement("assets/scenes/test/glow-box.json", {}, 16384, 4096, 4, 2); }
 
+// Emission per unit length from an emitter that absorbs nothing (albedo 1): the analog walk gathers it
+// at every collision, the others as usual; all agree.
+TEST(EmissionAgreement, GlowBoxPerUnitLengthAlbedoOne) {
+  expectAgreement("assets/scenes/test/glow-box.json", {"volumes.0.emission.units=\"per_length\"", "volumes.0.albedo=[1,1,1]"}, 16384, 4096,
+                  4, 2);
+}
+
 TEST(EmissionAgreement, Fire) { expectAgreement("assets/scenes/fire.json", {"camera.resolution=[24,24]"}, 2048, 1024, 3, 3); }
 
 TEST(EmissionAgreement, TorchInMist) {

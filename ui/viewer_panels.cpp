@@ -231,22 +231,45 @@ void Viewer::drawPanel() {
     edited_.camera.visit(editor);
     changed |= editor.changed;
   }
-  auto list = [&](const char* title, auto& items, auto label) {
-    if (!ImGui::CollapsingHeader(title, ImGuiTreeNodeFlags_DefaultOpen)) return;
+  // One tree node per item, with its fields, what the item warns about and a Remove button.
+  auto list = [&](const char* title, auto& items, auto label, auto warnings) {
+    if (!ImGui::CollapsingHeader(title, ImGuiTreeNodeFlags_DefaultOpen)) return false;
+    int remove = -1;
     for (size_t i = 0; i < items.size(); ++i) {
       ImGui::PushID(static_cast<int>(i));
       if (ImGui::TreeNodeEx(label(items[i], i).c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
         ParamEditor editor;
         items[i].visit(editor);
         changed |= editor.changed;
+        for (const std::string& w : warnings(items[i])) {
+          ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.55f, 0.3f, 1.0f));
+          ImGui::TextWrapped("%s", w.c_str());
+          ImGui::PopStyleColor();
+        }
+        if (ImGui::SmallButton("Remove")) remove = static_cast<int>(i);
         ImGui::TreePop();
       }
       ImGui::PopID();
     }
+    if (remove >= 0) items.erase(items.begin() + remove), changed = true;
+    return true;
   };
-  list("Volumes", edited_.volumes, [](const VolumeDesc& v, size_t i) { return v.name.empty() ? "volume " + std::to_string(i) : v.name; });
-  list("Lights", edited_.lights, [](const LightDesc& l, size_t i) { return std::to_string(i) + ": " + enumName(l.type); });
-  list("Surfaces", edited_.surfaces, [](const SurfaceDesc& s, size_t i) { return std::to_string(i) + ": " + enumName(s.type); });
+  auto none = [](const auto&) { return std::vector<std::string>{}; };
+  list("Volumes", edited_.volumes, [](const VolumeDesc& v, size_t i) { return v.name.empty() ? "volume " + std::to_string(i) : v.name; },
+       [](const VolumeDesc& v) { return emissionWarnings(v); });
+  if (list("Lights", edited_.lights, [](const LightDesc& l, size_t i) { return std::to_string(i) + ": " + enumName(l.type); }, none)) {
+    // The default rig's parts (and a point light) back after a Remove.
+    if (ImGui::SmallButton("Add sun")) edited_.lights.push_back(defaultSun()), changed = true;
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Add sky")) edited_.lights.push_back(defaultSky()), changed = true;
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Add point light")) {
+      LightDesc point;
+      point.position = edited_.camera.look_at + Vec3(0.0f, 1.0f, 0.0f);
+      edited_.lights.push_back(point), changed = true;
+    }
+  }
+  list("Surfaces", edited_.surfaces, [](const SurfaceDesc& s, size_t i) { return std::to_string(i) + ": " + enumName(s.type); }, none);
   ImGui::PopItemWidth();
   ImGui::End();
   if (changed) submitEdit("panel");
