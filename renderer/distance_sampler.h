@@ -1,4 +1,4 @@
-// Guided distance sampling along a ray's medium interval [t0, t1] (talk s.2.2; METHOD.md s.4).
+// Guided distance sampling along a ray's medium interval [t0, t1] (talk s.2.2; docs/method.md s.4).
 // - Piecewise-linear: knots (t_k, s_k) from the probes a ray crosses define a piecewise-linear
 //   density (flat beyond the first and last knot), mixed with a uniform floor so the support is
 //   complete: p(t) = floor / (t1 - t0) + (1 - floor) * lin(t) / integral(lin). No knots: uniform.

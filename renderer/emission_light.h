@@ -1,4 +1,4 @@
-// An emissive volume as a light source (talk s.2.1, Algorithm 2; METHOD.md s.3). A coarse
+// An emissive volume as a light source (talk s.2.1, Algorithm 2; docs/method.md s.3). A coarse
 // emission-energy-distribution grid over the medium stores, per cell, the integral of
 // mu_a * lum(Le) over the cell; a discrete CDF picks a cell, a uniform point y inside it gives the
 // direction w = normalize(y - x). The solid-angle pdf of w is

@@ -290,7 +290,7 @@ Decision analogEvent(const Collision& c, const CollisionCoefficients& k, float u
   return Decision::Scatter;
 }
 
-// Emission gathered at every collision (talk 2.1, METHOD.md s.2): P_a = 1, add mu_a Le / mu_bar;
+// Emission gathered at every collision (talk 2.1, docs/method.md s.2): P_a = 1, add mu_a Le / mu_bar;
 // absorption becomes the weight 1 - mu_a / mu_bar, and the walk scatters with
 // P_s = mu_s / (mu_s + mu_n), else continues. Off guided segments, the weight lost to absorption
 // along the walk is rouletted once it falls below 0.1 (unbiased, keeps walks short); guided
@@ -446,7 +446,7 @@ Rgb PathTracer::trace(PathState st, const PiecewiseLinearView* cameraGuide, Rng&
     const PathState segmentStart = guided ? st : PathState{};
     const SegmentWalk walk = walkSegment(st, tEnd, guided, emissionWeight, L, rng);
 
-    // The tracked scattering's MIS weight on a guided segment (METHOD.md s.4): on its NEE only in
+    // The tracked scattering's MIS weight on a guided segment (docs/method.md s.4): on its NEE only in
     // guided_vertex = direct (the continuation is the tracked technique's alone, unweighted), or
     // as its continuation's survival probability in path mode, where the guided vertex does
     // likewise so that a guided segment continues about one path on average instead of two.

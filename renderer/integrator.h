@@ -1,17 +1,17 @@
 // The volumetric path tracer. One tracking loop (tracking.h); this file decides what each
 // collision does, by named pieces of the strategy:
 // - event probabilities: conventional analog absorb / scatter / null with P = mu_a/mu_bar,
-//   mu_s/mu_bar, mu_n/mu_bar and emission added at absorption (METHOD.md s.2, the talk's Fig. 1
+//   mu_s/mu_bar, mu_n/mu_bar and emission added at absorption (docs/method.md s.2, the talk's Fig. 1
 //   left), or emission gathered at every collision with P_a = P_n = 1, absorption as a weight
 //   (strategy.emission.gather_every_collision; talk 2.1);
 // - majorant policy: the medium's per-cell mu_bar, optionally emission-aware (medium.cpp);
 // - light sampler: lights and, with strategy.emission.light_sampling, emissive volumes by their
 //   energy grid (Algorithm 2), all chosen by power; emission met along a phase/BSDF-sampled ray is
-//   MIS-weighted against that (METHOD.md s.3);
+//   MIS-weighted against that (docs/method.md s.3);
 // - distance sampler: with strategy.guiding, each guided ray segment also draws a guided distance
 //   (probes or equi-angular) whose null collisions on [0, t] come from ratio tracking; it is
 //   combined with the tracked scattering by MIS with p_guided = p_g(t) and
-//   p_tracked = prod(P_null) * mu_bar(t) P_s(t) (METHOD.md s.4; Miller et al. 2019). Emission
+//   p_tracked = prod(P_null) * mu_bar(t) P_s(t) (docs/method.md s.4; Miller et al. 2019). Emission
 //   along the ray is counted once, by the tracked walk. By default (guiding.guided_vertex = direct)
 //   the guided vertex adds only its direct light and the tracked vertex carries the path.
 // Scattering does next-event estimation (ratio-tracked transmittance, or Algorithm 1 toward
@@ -79,7 +79,7 @@ class PathTracer {
   // Follows a path from its current ray to the end; returns the radiance it gathers. The camera
   // ray's guided density comes from `cameraGuide` when given.
   Rgb trace(PathState state, const PiecewiseLinearView* cameraGuide, Rng& rng) const;
-  // The tracked walk along one segment (METHOD.md s.2): the one tracking loop with the strategy's
+  // The tracked walk along one segment (docs/method.md s.2): the one tracking loop with the strategy's
   // event probabilities (analogEvent or gatherEvent) as its collision callback. Adds emission to L.
   SegmentWalk walkSegment(PathState& state, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const;
   // Distance-sampler choice for one segment: whether it gets a guided sample, and its density.
@@ -90,7 +90,7 @@ class PathTracer {
   // first (used to spend about one continuation per guided segment in guided_vertex = path).
   bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f,
                      float directWeight = 1.0f) const;
-  // The guided distance sample of one ray segment (METHOD.md s.4), drawn from `guide`: its
+  // The guided distance sample of one ray segment (docs/method.md s.4), drawn from `guide`: its
   // vertex's direct light, and with guided_vertex = path also the path continuing from it.
   Rgb guidedSample(const PathState& state, const GuidedDistance& guide, Rng& rng) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).

@@ -1,4 +1,4 @@
-// Majorant grid and its 3D DDA (METHOD.md section 1). A coarse grid over a density grid's index
+// Majorant grid and its 3D DDA (docs/method.md s.1). A coarse grid over a density grid's index
 // space; each cell stores the largest voxel value any trilinear lookup inside the cell can touch
 // (its footprint, padded by one voxel), so maxDensity bounds the density everywhere in the cell.
 // The global majorant is the one-cell case. The DDA walks a ray through the cells and yields
@@ -34,7 +34,7 @@ struct CoarseGrid {
 using VoxelValueFactory = std::function<std::function<float(int, int, int)>()>;
 
 // For every cell of `layout`, the largest voxel value any trilinear lookup inside the cell can read
-// (its footprint padded by one voxel, METHOD.md s.1). Voxels outside `box` padded by 2 are skipped.
+// (its footprint padded by one voxel, docs/method.md s.1). Voxels outside `box` padded by 2 are skipped.
 std::vector<float> footprintMaxima(const CoarseGrid& layout, const IndexBox& box, const VoxelValueFactory& values);
 
 class MajorantGrid {

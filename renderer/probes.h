@@ -1,4 +1,4 @@
-// Probe spheres for scattering distance sampling (talk s.2.2; METHOD.md s.4). Probes sit on a
+// Probe spheres for scattering distance sampling (talk s.2.2; docs/method.md s.4). Probes sit on a
 // regular lattice over the non-empty part of the media (lattice points near which some medium can
 // scatter), each with a radius of influence. The talk's scattering sample weight of a probe is
 //     s(wo) = E[ mu_s(y) * rho(wo, w_light) * L_light * T(y, light) / p_light ]

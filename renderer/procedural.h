@@ -1,4 +1,4 @@
-// Built-in procedural volumes (METHOD.md s.0 scenes): torch flame, mist, cloud, smoke plume and the
+// Built-in procedural volumes (docs/method.md s.0 scenes): torch flame, mist, cloud, smoke plume and the
 // closed-form test shapes. Deterministic for a given description; written as real .vdb files.
 #pragma once
 

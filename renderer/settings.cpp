@@ -10,7 +10,7 @@ const std::vector<std::string>& strategyPresetNames() {
 StrategySettings strategyPreset(const std::string& name, const std::string& origin) {
   StrategySettings s;
   s.preset = name;
-  if (name == "conventional") return s;  // METHOD.md section 2, "conventional": the baseline
+  if (name == "conventional") return s;  // docs/method.md s.2, "conventional": the baseline
   if (name == "emission" || name == "full" || name == "equiangular") {
     // Talk s.2.1: emission-aware majorant + emission at every collision + NEE toward emissive volumes.
     s.majorant.emission_term = true;

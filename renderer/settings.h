@@ -22,7 +22,7 @@ struct EnumNames<MajorantStructure> {
   }
 };
 
-// METHOD.md section 1: the majorant policy.
+// docs/method.md s.1: the majorant policy.
 // mu_bar = max(maj(mu_t), min(k * maj(mu_a * lum(Le)), c / voxel_size)) when the emission term is on
 // (talk s.2.1), else maj(mu_t). It never drops below maj(mu_t), so mu_n >= 0 always. The emission
 // term is a sampling choice, not a bound: any mu_bar >= mu_t keeps every estimator unbiased.
@@ -48,7 +48,7 @@ struct MajorantPolicy {
   }
 };
 
-// Emission sampling (talk s.2.1; METHOD.md s.2 and s.3).
+// Emission sampling (talk s.2.1; docs/method.md s.2 and s.3).
 struct EmissionSettings {
   bool gather_every_collision = false;  // P_a = P_n = 1: add mu_a Le / mu_bar at every collision
   bool light_sampling = false;          // emissive volumes are lights: NEE via the energy grid + MIS
@@ -74,7 +74,7 @@ struct EnumNames<DistanceGuide> {
   }
 };
 
-// How the guided and the tracked scattering vertex of a guided segment combine (METHOD.md s.4).
+// How the guided and the tracked scattering vertex of a guided segment combine (docs/method.md s.4).
 // one_sample: one technique per segment, the guided one with probability guided_probability, its
 // vertex weighted by the balance heuristic of the mixture (Veach's one-sample MIS): one NEE per
 // segment instead of one for each technique.
@@ -93,7 +93,7 @@ struct EnumNames<GuideCombination> {
 
 // What the guided vertex estimates. direct: only its direct light (NEE), the tracked vertex alone
 // continuing the path (the talk's "camera rays and direct illumination"); path: its direct light
-// and a continuing path, both vertices weighted by MIS (METHOD.md s.4's simplest form).
+// and a continuing path, both vertices weighted by MIS (docs/method.md s.4's simplest form).
 enum class GuidedVertex { Direct, Path };
 template <>
 struct EnumNames<GuidedVertex> {
@@ -103,7 +103,7 @@ struct EnumNames<GuidedVertex> {
   }
 };
 
-// Scattering (distance) sampling, talk s.2.2 and METHOD.md s.4: a guided distance sample per ray,
+// Scattering (distance) sampling, talk s.2.2 and docs/method.md s.4: a guided distance sample per ray,
 // combined with the tracked (transmittance-based) sample by MIS (Miller et al. 2019).
 struct GuidingSettings {
   DistanceGuide guide = DistanceGuide::None;

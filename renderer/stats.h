@@ -1,4 +1,4 @@
-// Statistical agreement between renders (METHOD.md s.5): the image is split into regions; each
+// Statistical agreement between renders (docs/method.md s.5): the image is split into regions; each
 // region's mean (per channel) has a standard error from the per-pixel sums of squares; two renders
 // agree when no region differs by more than a Bonferroni-corrected z threshold. Used by the tests
 // to show strategies converge to the same image, and by the viewer's agreement indicator later.

@@ -1,4 +1,4 @@
-// The one null-collision tracking loop (METHOD.md section 2). It merges the majorant DDAs of every
+// The one null-collision tracking loop (docs/method.md s.2). It merges the majorant DDAs of every
 // medium the ray crosses into one piecewise-constant combined majorant mu_bar, draws tentative
 // collisions with rate mu_bar (dt = -ln(1 - xi) / mu_bar), and hands each to a callback that
 // decides what the collision is: delta tracking, ratio tracking and (later) emission gathering all

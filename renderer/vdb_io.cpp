@@ -1,4 +1,4 @@
-// OpenVDB -> NanoVDB loading. Heavy headers live here on purpose (see TOOLCHAIN.md build costs).
+// OpenVDB -> NanoVDB loading. Heavy headers live here on purpose: OpenVDB headers cost tens of seconds per file to compile.
 #include "vdb_io.h"
 
 #include "fields.h"

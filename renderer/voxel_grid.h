@@ -1,6 +1,6 @@
 // A read-only float grid for the hot loop: a NanoVDB grid (compact, cache-friendly, no OpenVDB
 // headers needed) plus the index-to-world transform. Sampling is trilinear in index space with voxel
-// centres at integer coordinates, the same everywhere (rendering, majorants, tests): METHOD.md s.0.
+// centres at integer coordinates, the same everywhere (rendering, majorants, tests): docs/method.md s.0.
 #pragma once
 
 #include "core.h"

@@ -1,4 +1,4 @@
-// Closed forms (METHOD.md s.5): transmittance through a homogeneous slab and a linear density ramp
+// Closed forms (docs/method.md s.5): transmittance through a homogeneous slab and a linear density ramp
 // (ratio tracking and delta tracking, every majorant policy); an emission-only slab
 // L = Le (1 - exp(-tau)); and a white furnace that must return the environment radiance exactly.
 #include "blackbody.h"

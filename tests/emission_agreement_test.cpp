@@ -1,4 +1,4 @@
-// Emission sampling is unbiased: every setting converges to the conventional image (METHOD.md s.5).
+// Emission sampling is unbiased: every setting converges to the conventional image (docs/method.md s.5).
 // Each scene is rendered once with `conventional` and then with the emission preset and with each
 // emission part on its own, with emission weights 0, 1 and huge, the cap on and off, global and grid
 // majorants. Regions are compared by a Bonferroni-corrected z-test (alpha 1e-3 per comparison).

@@ -1,4 +1,4 @@
-// Emission sampling (talk s.2.1; METHOD.md s.1-3): the Algorithm 2 pdf integrates to one over the
+// Emission sampling (talk s.2.1; docs/method.md s.1-3): the Algorithm 2 pdf integrates to one over the
 // sphere and matches a histogram of sampled directions (chi-square), from outside and inside the
 // volume; the emission-aware majorant never drops below maj(mu_t) and follows its policy.
 #include "integrator.h"

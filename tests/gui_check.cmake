@@ -261,12 +261,13 @@ elseif(MODE STREQUAL "quit_prompt")
        "${VIEWER} ${SCENE} --set camera.resolution=[160,90] --edit volumes.1.g=0.5 &
         pid=$!
         sleep 3
+        xdotool search --sync --name Candela >/dev/null; sleep 2
         xdotool mousemove 400 400 key ctrl+q
-        sleep 1.5
+        sleep 2
         if ! kill -0 $pid 2>/dev/null; then echo 'QUIT WITHOUT ASKING'; exit 1; fi
         echo 'asked before quitting'
         xdotool key d
-        for i in 1 2 3 4 5 6 7 8 9 10; do sleep 0.5; kill -0 $pid 2>/dev/null || break; done
+        for i in $(seq 1 40); do sleep 0.5; kill -0 $pid 2>/dev/null || break; done
         if kill -0 $pid 2>/dev/null; then echo 'STILL RUNNING AFTER DISCARD'; kill $pid; exit 1; fi
         wait $pid
 ")

@@ -3,7 +3,7 @@
 // heuristic, a guided vertex that continues its own path, guiding on every segment, the balance
 // heuristic over both vertices and one-sample MIS in path mode all agree
 // with `conventional` on god-rays (side-lit and backlit), torch-in-mist, cloud and a point light
-// inside the medium, with the scattering medium's g = 0, 0.9 and -0.9 (METHOD.md s.5).
+// inside the medium, with the scattering medium's g = 0, 0.9 and -0.9 (docs/method.md s.5).
 // Power (checked by injecting a bias into the guided sample's weight in integrator.cpp): a 5% bias
 // in the guided contribution fails point-in-mist (z up to 5.7 against a threshold of 4.1), where
 // in-scattering from the guided segment dominates the pixels. On god-rays the floor and walls carry
@@ -31,7 +31,7 @@ const std::vector<std::pair<const char*, std::vector<std::string>>>& variants() 
       {"MIS off (average)", {"strategy.preset=\"full\"", "strategy.guiding.combination=\"average\""}},
       {"power heuristic, 2 segments",
        {"strategy.preset=\"full\"", "strategy.guiding.combination=\"power\"", "strategy.guiding.guided_segments=2"}},
-      // The guided vertex continues a path too (METHOD.md s.4's simplest form) instead of adding only
+      // The guided vertex continues a path too (docs/method.md s.4's simplest form) instead of adding only
       // its direct light; and direct-light guiding on every segment of the path.
       {"guided vertex continues (path)", {"strategy.preset=\"full\"", "strategy.guiding.guided_vertex=\"path\""}},
       {"every segment guided", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=64"}},

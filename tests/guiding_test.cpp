@@ -1,4 +1,4 @@
-// Scattering (distance) sampling, talk s.2.2 / METHOD.md s.4: the piecewise-linear sampler matches
+// Scattering (distance) sampling, talk s.2.2 / docs/method.md s.4: the piecewise-linear sampler matches
 // its pdf (chi-square, including zero- and one-knot cases), the equi-angular sampler matches its
 // pdf, probes are placed and learned within budget, and a background relearn swaps a new set in
 // while the old one keeps serving.

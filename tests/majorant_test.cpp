@@ -1,4 +1,4 @@
-// Majorant grid and DDA (METHOD.md s.1): the DDA visits exactly the cells a brute-force slab test
+// Majorant grid and DDA (docs/method.md s.1): the DDA visits exactly the cells a brute-force slab test
 // finds, in order; no trilinear lookup ever exceeds its cell's majorant (randomised).
 #include "majorant.h"
 #include "procedural.h"

@@ -205,6 +205,7 @@ class Viewer {
   FrameRange frames_;
   bool playing_ = false;
   int playSpp_ = 16;
+  float playSeconds_ = 0.0f;
   uint64_t frameRequest_ = 0;
   ViewerClock::time_point frameStepStart_;
   bool frameLatencyPending_ = false;

@@ -159,11 +159,15 @@ void Viewer::drawDialogs() {
     showDiscard_ = false;
     ImGui::OpenPopup("Unsaved edits");
   }
+  // Keys through GLFW's sticky state: a press and release between two frames is not lost (ImGui 1.86
+  // only sees keys held at a frame).
+  const bool enterKey = keys_.pressed(window_, GLFW_KEY_ENTER), dKey = keys_.pressed(window_, GLFW_KEY_D),
+             escapeKey = keys_.pressed(window_, GLFW_KEY_ESCAPE);
   if (ImGui::BeginPopupModal("Unsaved edits", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::Text("%s has unsaved edits.", documentPath_.empty() ? "The scene" : fs::path(documentPath_).filename().string().c_str());
     ImGui::Text("Save them before you %s?", discardWhat_.c_str());
     ImGui::TextDisabled("Enter: save, D: discard, Esc: cancel");
-    if (ImGui::Button("Save") || ImGui::IsKeyPressed(GLFW_KEY_ENTER)) {
+    if (ImGui::Button("Save") || enterKey) {
       ImGui::CloseCurrentPopup();
       if (untitled_ || documentPath_.empty()) {
         showSaveAs_ = true;  // the action runs once saved
@@ -174,7 +178,7 @@ void Viewer::drawDialogs() {
       }
     }
     ImGui::SameLine();
-    if (ImGui::Button("Discard") || ImGui::IsKeyPressed(GLFW_KEY_D)) {
+    if (ImGui::Button("Discard") || dKey) {
       ImGui::CloseCurrentPopup();
       dirty_ = false;
       if (pendingAction_) {
@@ -184,7 +188,7 @@ void Viewer::drawDialogs() {
       }
     }
     ImGui::SameLine();
-    if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+    if (ImGui::Button("Cancel") || escapeKey) {
       pendingAction_ = nullptr;
       ImGui::CloseCurrentPopup();
     }
@@ -194,7 +198,11 @@ void Viewer::drawDialogs() {
 
 void Viewer::handleKeys() {
   ImGuiIO& io = ImGui::GetIO();
-  const bool ctrl = io.KeyCtrl, shift = io.KeyShift;
+  // Modifiers through GLFW's sticky keys as well as ImGui: a chord pressed and released between two
+  // frames (a fast typist, or xdotool in the GUI tests) still counts.
+  auto held = [&](int left, int right) { return glfwGetKey(window_, left) == GLFW_PRESS || glfwGetKey(window_, right) == GLFW_PRESS; };
+  const bool ctrl = held(GLFW_KEY_LEFT_CONTROL, GLFW_KEY_RIGHT_CONTROL) || io.KeyCtrl;
+  const bool shift = held(GLFW_KEY_LEFT_SHIFT, GLFW_KEY_RIGHT_SHIFT) || io.KeyShift;
   // Query every key each frame so edges are tracked even while a text field has focus.
   auto pressed = [&](int key) { return keys_.pressed(window_, key); };
   const bool f = pressed(GLFW_KEY_F), r = pressed(GLFW_KEY_R), home = pressed(GLFW_KEY_HOME), l = pressed(GLFW_KEY_L),

@@ -470,7 +470,8 @@ void Viewer::pollTimeline() {
     prefetched = next.render.frame;
     prefetcher_->prefetch(next);
   }
-  if (playing_ && frame_->film.spp() >= playSpp_) setFrame(next.render.frame);
+  const bool frameDone = frame_->film.spp() >= playSpp_ || (playSeconds_ > 0.0f && frame_->seconds >= playSeconds_);
+  if (playing_ && frameDone) setFrame(next.render.frame);
 }
 
 void Viewer::drawTimeline() {
@@ -497,12 +498,17 @@ void Viewer::drawTimeline() {
   ImGui::SameLine();
   if (ImGui::Button(">|")) setFrame(frames_.last);
   ImGui::SameLine();
-  ImGui::SetNextItemWidth(static_cast<float>(ww) - 560.0f);
+  ImGui::SetNextItemWidth(static_cast<float>(ww) - 640.0f);
   int frame = edited_.render.frame;
   if (ImGui::SliderInt("##frame", &frame, frames_.first, frames_.last, "frame %d") && frame != edited_.render.frame) setFrame(frame);
   ImGui::SameLine();
   ImGui::SetNextItemWidth(90.0f);
-  ImGui::DragInt("spp per frame", &playSpp_, 1.0f, 1, 1 << 16);
+  ImGui::DragInt("spp", &playSpp_, 1.0f, 1, 1 << 16);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Play steps on once a frame has this many samples per pixel...");
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(70.0f);
+  ImGui::DragFloat("s", &playSeconds_, 0.05f, 0.0f, 3600.0f, "%.1f");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("...or this many seconds of rendering, whichever comes first (0: spp only)");
   ImGui::SameLine();
   if (lastFrameStepMs_ > 0.0)
     ImGui::TextDisabled("%d frames, step %.0f ms", frames_.count, lastFrameStepMs_);
