@@ -1,5 +1,6 @@
 #include "vdb_import.h"
 
+#include "blackbody.h"
 #include "sequence.h"
 
 #include <algorithm>
@@ -145,18 +146,24 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
 
   const VdbGridInfo* flame = firstFloat(info, flameGridNames());
   const VdbGridInfo* temperature = firstFloat(info, temperatureGridNames());
+  // Emission per unit length, as Cycles, Houdini and Arnold shade fire: the flame glows whatever the
+  // smoke's density there. Its peak is set so that a ray across the thinnest side of the volume
+  // gathers a radiance of about 8.
+  const Vec3 extent = glm::max(density->worldMax - density->worldMin, Vec3(1e-6f));
+  const float across = std::max(1e-6f, std::min(extent.x, std::min(extent.y, extent.z)));
   if (flame && flame->maxValue > 0.0f) {
-    // Flame (or fuel) drives a fire-coloured emission grid; its peak maps to radiance 8.
     volume.emission.mode = EmissionMode::Grid;
+    volume.emission.units = EmissionUnits::PerLength;
     volume.emission_grid = flame->name;
     volume.emission.color = Vec3(1.0f, 0.45f, 0.12f);
-    volume.emission.intensity = 8.0f / flame->maxValue;
+    volume.emission.intensity = 8.0f / (flame->maxValue * luminance(Rgb(1.0f, 0.45f, 0.12f)) * across);
     report.emissionGrid = flame->name;
-    report.emissionMode = "grid";
+    report.emissionMode = "grid (per unit length)";
   } else if (temperature && temperature->maxValue > 0.0f) {
     // Kelvin when the values look like Kelvin, else a normalised simulation temperature whose peak
     // maps to 2000 K (500 K, where a blackbody turns black, at zero).
     volume.emission.mode = EmissionMode::Blackbody;
+    volume.emission.units = EmissionUnits::PerLength;
     volume.temperature_grid = temperature->name;
     if (temperature->maxValue >= 200.0f) {
       volume.emission.temperature_scale = 1.0f;
@@ -165,8 +172,11 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
       volume.emission.temperature_scale = 1500.0f / temperature->maxValue;
       volume.emission.temperature_offset = 500.0f;
     }
+    const float peakKelvin = temperature->maxValue * volume.emission.temperature_scale + volume.emission.temperature_offset;
+    const float peak = luminance(blackbodyExact(std::min(peakKelvin, 12000.0f)));
+    volume.emission.intensity = peak > 0.0f ? std::min(8.0f / (peak * across), 1e6f) : 1.0f;
     report.emissionGrid = temperature->name;
-    report.emissionMode = "blackbody";
+    report.emissionMode = "blackbody (per unit length)";
   }
   for (const auto& g : info.grids)
     if (g.name != volume.density_grid && g.name != report.emissionGrid) report.ignoredGrids.push_back(g.name + (g.isFloat ? "" : " (" + g.type + ")"));

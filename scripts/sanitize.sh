@@ -14,7 +14,7 @@ B=build-asan
 cmake -S . -B $B -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCANDELA_SANITIZE=ON -DCANDELA_FUZZ=ON \
   -DCANDELA_BUILD_BENCHMARKS=OFF -DCANDELA_CORPUS_MEMORY_GB=0 >/dev/null
 cmake --build $B -j2 --target candela-cli hostile_vdb fuzz_scene fuzz_vdb phase_test majorant_test closed_form_test \
-  scene_errors_test render_test emission_test guiding_test
+  scene_errors_test render_test emission_test guiding_test workflow_test emission_units_test document_test
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$ROOT/tests/sanitizers/ubsan.supp
 export LSAN_OPTIONS=suppressions=$ROOT/tests/sanitizers/lsan.supp:print_suppressions=0

@@ -333,6 +333,11 @@ void Viewer::pollSession() {
                   latest->film.spp());
       std::fflush(stdout);
     }
+    if (reframeOnNextImage_ && !latest->preview && latest->scene && !latest->scene->volumes.empty() && !edited_.volumes.empty() &&
+        toJson(latest->scene->volumes[0]) == toJson(edited_.volumes[0])) {
+      reframeOnNextImage_ = false;
+      frameVolume();
+    }
     // Auto exposure on open: from the first image with a few samples, so noise does not decide it.
     if (autoExposurePending_ && full && latest->film.spp() >= 4 && !pendingOpen_) {
       autoExposurePending_ = false;

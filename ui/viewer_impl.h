@@ -159,6 +159,7 @@ class Viewer {
   bool gestureActive_ = false;  // a drag or a widget edit in progress: its edits are one undo step
   ViewerClock::time_point lastWheel_;
   bool autoExposurePending_ = false;
+  bool reframeOnNextImage_ = false;  // after the up axis changes: frame the volume once it is rebuilt
   std::string importSummary_;
   std::string title_;
   std::vector<std::string> droppedPaths_;

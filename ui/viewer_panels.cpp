@@ -197,6 +197,18 @@ void Viewer::drawPanel() {
       ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
       ImGui::TextWrapped("Opened as a volume: %s", importSummary_.c_str());
       ImGui::PopStyleColor();
+      // The up axis, selectable: Z-up data is turned upright by -90 degrees about X, then reframed.
+      const bool zUp = !edited_.volumes.empty() && edited_.volumes[0].transform.rotate_deg.x == -90.0f;
+      auto setUp = [&](float degrees) {
+        for (auto& v : edited_.volumes) v.transform.rotate_deg.x = degrees;
+        reframeOnNextImage_ = true;
+        submitEdit();
+      };
+      ImGui::TextUnformatted("Up axis of the file:");
+      ImGui::SameLine();
+      if (ImGui::RadioButton("Y", !zUp) && zUp) setUp(0.0f);
+      ImGui::SameLine();
+      if (ImGui::RadioButton("Z (Blender)", zUp) && !zUp) setUp(-90.0f);
     }
   }
   drawSnapshots();

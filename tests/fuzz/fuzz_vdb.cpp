@@ -1,5 +1,8 @@
 // libFuzzer target: the VDB loader (loadVdbGrids) on arbitrary bytes, asking for a density and a
-// temperature grid as a blackbody volume does. Any outcome but grids or an InputError is a finding.
+// temperature grid as a blackbody volume does, and opening the bytes as a bare VDB does (the grid
+// list, its metadata and bounding boxes: sceneFromVdb). Any outcome but a result or an InputError is
+// a finding.
+#include "vdb_import.h"
 #include "vdb_io.h"
 
 #include "fields.h"
@@ -21,6 +24,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   try {
     (void)candela::loadVdbGrids(path, {"density", "temperature"}, "volumes.0.file");
+  } catch (const candela::InputError&) {
+  }
+  try {
+    (void)candela::sceneFromVdb(path);
   } catch (const candela::InputError&) {
   }
   return 0;
