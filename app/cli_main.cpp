@@ -48,6 +48,13 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
   std::vector<std::string> warnings;
   auto scene = Scene::build(desc, &warnings);
   for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
+  if (const AutoDecision* d = scene->autoDecision()) {
+    std::printf("%s (%.2f s)\n", d->summary().c_str(), d->pilotSeconds);
+    if (std::getenv("CANDELA_VERBOSE"))
+      for (const auto& m : d->pilot)
+        std::printf("  pilot %-24s relative variance %.4g  work per sample %.0f  efficiency %.3f\n", m.name.c_str(), m.relativeVariance,
+                    m.workPerSample, m.efficiency);
+  }
   if (auto probes = scene->probes())
     std::printf("probes: %zu learned of %d placed (spacing %.3g, radius %.3g) in %.2f s%s\n", probes->probes().size(), probes->placed(),
                 probes->spacing(), probes->radius(), probes->learnSeconds(), probes->complete() ? "" : " (CUT BY THE TIME CAP)");
@@ -68,6 +75,7 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   image.metadata["spp"] = std::to_string(film.spp());
   image.metadata["seconds"] = std::to_string(t);
   image.metadata["frame"] = std::to_string(desc.render.frame);
+  if (const AutoDecision* d = scene->autoDecision()) image.metadata["auto_decision"] = d->summary();
   image.metadata["rejected_samples"] = std::to_string(film.rejectedSamples());
   // A PNG is display-referred: the scene's exposure, or for an opened VDB one that shows the volume.
   float exposure = desc.display.exposure;
@@ -143,6 +151,89 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   return 0;
 }
 
+// Fits WorkCounters::cost()'s constants: time of 4-spp passes at 160x90 on one thread against the
+// counted work, over the report scenes and strategies, by least squares (non-negative).
+int calibrate() {
+  const std::string assets = std::string(CANDELA_SOURCE_DIR) + "/assets/scenes/";
+  struct Row {
+    double x[6];
+    double seconds;
+  };
+  std::vector<Row> rows;
+  for (const char* name : {"torch-in-mist", "torch-in-fog", "fire", "god-rays", "god-rays-backlit", "god-rays-dark", "cloud", "test/glow-box"}) {
+    for (const char* preset : {"conventional", "emission", "full", "full8", "equiangular"}) {
+      SceneDesc desc = loadSceneDesc(assets + name + ".json");
+      desc.strategy = strategyPreset(std::string(preset) == "full8" ? "full" : preset);
+      if (std::string(preset) == "full8") desc.strategy.guiding.guided_segments = 8;
+      desc.camera.resolution = {160, 90};
+      auto scene = Scene::build(desc);
+      ProgressiveRenderer renderer(scene, RenderOptions{1, 16});
+      Film film;
+      renderer.renderPass(film, 1);  // camera guide tables and caches, not timed
+      const WorkCounters before = renderer.work();
+      // The fastest of three 8-spp passes: the least disturbed by anything else on the machine.
+      double seconds = 1e30;
+      for (int repeat = 0; repeat < 3; ++repeat) {
+        const auto t0 = std::chrono::steady_clock::now();
+        renderer.renderPass(film, 8);
+        seconds = std::min(seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      }
+      WorkCounters w = renderer.work();
+      w.samples -= before.samples, w.collisions -= before.collisions, w.segments -= before.segments, w.rays -= before.rays,
+          w.knots -= before.knots, w.guided -= before.guided;
+      // Three passes counted, the fastest timed: one pass's work.
+      w.samples /= 3, w.collisions /= 3, w.segments /= 3, w.rays /= 3, w.knots /= 3, w.guided /= 3;
+      rows.push_back({{double(w.samples), double(w.collisions), double(w.segments), double(w.rays), double(w.knots), double(w.guided)}, seconds});
+      std::printf("%-18s %-13s %.3f s: samples %llu collisions %llu segments %llu rays %llu knots %llu guided %llu\n", name, preset, seconds,
+                  (unsigned long long)w.samples, (unsigned long long)w.collisions, (unsigned long long)w.segments,
+                  (unsigned long long)w.rays, (unsigned long long)w.knots, (unsigned long long)w.guided);
+    }
+  }
+  // Relative least squares (each row weighted by 1 / its time), with terms whose coefficient comes
+  // out negative dropped and the fit redone.
+  bool active[6] = {true, true, true, true, true, true};
+  double c[6] = {};
+  for (int round = 0; round < 5; ++round) {
+    double a[6][7] = {};
+    for (const Row& r : rows)
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j) {
+          if (!active[i] || !active[j]) continue;
+          const double wgt = 1.0 / (r.seconds * r.seconds);
+          a[i][j] += r.x[i] * r.x[j] * wgt;
+          if (j == 0) a[i][6] += r.x[i] * r.seconds * wgt;
+        }
+    for (int i = 0; i < 6; ++i)
+      if (!active[i]) a[i][i] = 1.0, a[i][6] = 0.0;
+    for (int i = 0; i < 6; ++i) {  // Gauss-Jordan
+      int pivot = i;
+      for (int k = i + 1; k < 6; ++k)
+        if (std::abs(a[k][i]) > std::abs(a[pivot][i])) pivot = k;
+      for (int j = 0; j < 7; ++j) std::swap(a[i][j], a[pivot][j]);
+      for (int k = 0; k < 6; ++k) {
+        if (k == i || a[i][i] == 0.0) continue;
+        const double f = a[k][i] / a[i][i];
+        for (int j = 0; j < 7; ++j) a[k][j] -= f * a[i][j];
+      }
+    }
+    bool dropped = false;
+    for (int i = 0; i < 6; ++i) {
+      c[i] = a[i][i] != 0.0 ? a[i][6] / a[i][i] : 0.0;
+      if (active[i] && c[i] < 0.0) active[i] = false, dropped = true;
+    }
+    if (!dropped) break;
+  }
+  double worst = 0.0;
+  for (const Row& r : rows) {
+    double predicted = 0.0;
+    for (int i = 0; i < 6; ++i) predicted += c[i] * r.x[i];
+    worst = std::max(worst, std::abs(predicted / r.seconds - 1.0));
+  }
+  std::printf("ns per operation: samples %.1f, collisions %.1f, segments %.1f, rays %.1f, knots %.1f, guided %.1f (worst relative error %.0f%%)\n",
+              1e9 * c[0], 1e9 * c[1], 1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], 100.0 * worst);
+  return 0;
+}
+
 int bench(const std::string& scenePath, const std::string& strategiesText, const std::string& timesText, const std::string& refPath,
           int refSpp, const std::string& refStrategy, const std::string& outDir, int threads, const std::vector<std::string>& sets,
           const std::string& sweep) {
@@ -215,13 +306,15 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     if (reference.width != scene->camera().width() || reference.height != scene->camera().height())
       throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
                        ", expected the scene's " + std::to_string(scene->camera().width()) + "x" + std::to_string(scene->camera().height()));
+    // auto's decision (rules, probes, pilot) is charged to its time: it renders for what is left.
+    const double pilot = scene->autoDecision() ? scene->autoDecision()->pilotSeconds - scene->autoDecision()->probeSeconds : 0.0;
     for (double budget : times) {
       ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
       Film film;
       ConvergencePoint p;
       p.strategy = label;
       p.budgetSeconds = budget;
-      p.seconds = renderer.renderBudget(film, 0, budget, 1);
+      p.seconds = pilot + renderer.renderBudget(film, 0, std::max(0.01, budget - pilot), 1);
       p.spp = film.spp();
       p.rejected = film.rejectedSamples();
       const ErrorMetrics e = film.spp() > 0 ? imageError(film.meanImage(), reference.rgb) : ErrorMetrics{NAN, NAN};
@@ -358,6 +451,7 @@ int main(int argc, char** argv) {
   g->add_option("--temperature", gen.temperature, "constant/ramp temperature");
 
   bool quick = false;
+  auto* cal = app.add_subcommand("calibrate", "Fit the work-cost constants the auto strategy's pilot uses (work.h) against render time");
   auto* rep = app.add_subcommand("report", "Speed-versus-accuracy report: every scene x strategy at equal time, plus the stability suite (DIR/index.html)");
   rep->add_flag("--quick", quick, "Lower resolution and budgets (CI: under 5 minutes on 2 cores)");
   rep->add_option("-o,--output", out, "Output directory")->required();
@@ -378,6 +472,7 @@ int main(int argc, char** argv) {
   if (maxMemoryGb > 0.0) setMemoryBudgetBytes(static_cast<size_t>(std::min(maxMemoryGb, 1e6) * 1073741824.0));
   try {
     if (rep->parsed()) return runReport(quick, out, threads);
+    if (cal->parsed()) return calibrate();
     if (r->parsed()) {
       importOptions.up = upAxis == "z" ? UpAxis::Z : upAxis == "y" ? UpAxis::Y : UpAxis::Auto;
       return render(scenePath, out, spp, seconds, seed, threads, preset, sets, importOptions, framesText);

@@ -73,10 +73,11 @@ DisplayImage errorMap(int w, int h, const std::vector<float>& image, const std::
   return d;
 }
 
-const uint8_t kStrategyColours[4][3] = {{230, 120, 90}, {90, 170, 230}, {120, 210, 110}, {220, 200, 90}};
+const uint8_t kStrategyColours[5][3] = {{230, 120, 90}, {90, 170, 230}, {120, 210, 110}, {220, 200, 90}, {200, 120, 220}};
 
 struct Run {
   std::string strategy;
+  std::string note;   // auto: what it decided and why
   Film film;          // at the largest budget
   double seconds = 0.0;
   ErrorMetrics error;
@@ -124,11 +125,14 @@ int runReport(bool quick, const std::string& dir, int threads) {
       ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
       Run run;
       run.strategy = preset;
+      // auto's decision (rules, probes, pilot) is charged to its time: it renders for what is left.
+      const double pilot = scene->autoDecision() ? scene->autoDecision()->pilotSeconds - scene->autoDecision()->probeSeconds : 0.0;
+      if (const AutoDecision* d = scene->autoDecision()) run.strategy = "auto (" + d->chosen + ")", run.note = d->summary();
       for (double budget : budgets) {
         Film film;
-        const double t = renderer.renderBudget(film, 1 << 24, budget, 1);
+        const double t = pilot + renderer.renderBudget(film, 1 << 24, std::max(0.01, budget - pilot), 1);
         const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
-        points.push_back({preset, budget, t, film.spp(), e.mse, e.relmse, film.rejectedSamples()});
+        points.push_back({run.strategy, budget, t, film.spp(), e.mse, e.relmse, film.rejectedSamples()});
         if (budget == budgets.back()) run.film = film, run.seconds = t, run.error = e;
       }
       std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), preset.c_str(), run.error.relmse, run.seconds, run.film.spp());
@@ -154,7 +158,27 @@ int runReport(bool quick, const std::string& dir, int threads) {
       std::snprintf(row, sizeof(row), "| %s | %d | %.4g | %.4g | x%.2f |\n", run.strategy.c_str(), run.film.spp(), run.error.relmse, eff, eff / baseEff);
       table << row;
     }
-    body << "</table></div>\n<div class=row>";
+    body << "</table></div>\n";
+    // auto against the best fixed preset (the oracle a user who knew would pick), by relMSE and MSE.
+    for (const auto& run : runs) {
+      if (run.note.empty()) continue;
+      double oracle = 0.0, oracleMse = 0.0;
+      std::string oracleName;
+      for (const auto& other : runs) {
+        if (!other.note.empty()) continue;
+        const double eff = 1.0 / (other.error.relmse * other.seconds), effMse = 1.0 / (other.error.mse * other.seconds);
+        if (eff > oracle) oracle = eff, oracleName = other.strategy;
+        oracleMse = std::max(oracleMse, effMse);
+      }
+      const double eff = 1.0 / (run.error.relmse * run.seconds), effMse = 1.0 / (run.error.mse * run.seconds);
+      char line[512];
+      std::snprintf(line, sizeof(line), "%s: x%.2f the best fixed preset (%s) by relMSE, x%.2f by MSE, its decision included.", run.strategy.c_str(),
+                    eff / oracle, oracleName.c_str(), effMse / oracleMse);
+      body << "<p>" << html(line) << "<br><small>" << html(run.note) << "</small></p>\n";
+      table << "\n" << line << " " << run.note << "\n";
+      std::printf("report: %s %s\n", name.c_str(), line);
+    }
+    body << "<div class=row>";
     for (const auto& run : runs)
       body << "<figure>" << pngTag(srgbImage(w, h, run.film.meanImage()), tmp, run.strategy) << pngTag(errorMap(w, h, run.film.meanImage(), reference.rgb), tmp, run.strategy + " error")
            << "<figcaption>" << run.strategy << ", " << run.film.spp() << " spp in " << std::fixed << std::setprecision(2) << run.seconds
@@ -189,7 +213,7 @@ int runReport(bool quick, const std::string& dir, int threads) {
         else ++ties;
         for (int y = by; y < std::min(h, by + block); ++y)
           for (int x = bx; x < std::min(w, bx + block); ++x)
-            for (int c = 0; c < 3; ++c) win.rgb8[3 * (size_t(y) * w + x) + c] = signal ? kStrategyColours[best % 4][c] : 60;
+            for (int c = 0; c < 3; ++c) win.rgb8[3 * (size_t(y) * w + x) + c] = signal ? kStrategyColours[best % 5][c] : 60;
       }
     body << "<figure>" << pngTag(win, tmp, "winner map") << "<figcaption>most efficient strategy per 8x8 block (itself a noisy estimate at short budgets): ";
     for (size_t s = 0; s < runs.size(); ++s)

@@ -44,6 +44,12 @@ bool PathTracer::guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, G
   return true;
 }
 
+float PathTracer::mediaOpticalDepth(const Ray& ray) const {
+  float tIn = 0.0f, tOut = 0.0f;
+  if (!mediumInterval(ray, kInfinity, tIn, tOut)) return -1.0f;
+  return majorantOpticalDepth(ray, tIn, tOut);
+}
+
 bool PathTracer::mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const {
   tIn = kInfinity;
   tOut = 0.0f;
@@ -377,6 +383,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const PiecewiseLi
 }
 
 Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, Rng& rng) const {
+  ++threadWork().guided;
   const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
   float pdf = 0.0f;

@@ -44,6 +44,9 @@ class PathTracer {
   // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
   // no medium, or thicker than guiding.max_optical_depth). For the inspector and the camera cache.
   bool guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out) const;
+  // Optical depth of the majorant of mu_t along a whole ray through the media (no surfaces), or a
+  // negative value when the ray misses every medium. For the auto strategy's scene rules.
+  float mediaOpticalDepth(const Ray& ray) const;
 
   // Light scattered toward wo at a medium point with HG parameter g, by light sampling alone: the
   // phase-weighted direct light, emissive volumes included (one light chosen by the light sampler).

@@ -54,6 +54,7 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
     builtStructure_ = policy.structure;
     builtCellSize_ = cellSize;
     emissionMaxima_.clear();
+    radianceScale_ = 0.0f;
   }
   const bool emissionTerm = policy.emission_term && policy.emission_weight > 0.0f && emissive_;
   // Per unit length, emission may sit where mu_t is 0: the majorant needs its maxima whatever the policy.
@@ -71,7 +72,20 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   // mu_bar = max(maj(mu_t), min(k * maj(mu_a lum(Le)), c / voxel_size)); rounded up by a few ulps so
   // float rounding in the trilinear lerp can never exceed maj(mu_t).
   const float scale = desc_.sigma_t_scale * policy.safety_factor * (1.0f + 4e-7f);
-  const float emissionScale = policy.emission_weight;
+  // The radiance scale: the brightest cell's source per unit of its densest mu_a (a bound on Le
+  // there), or per unit length the brightest E times a voxel.
+  if (!emissionMaxima_.empty() && radianceScale_ == 0.0f) {
+    const float absorption = desc_.sigma_t_scale * (1.0f - albedoAverage_);
+    for (size_t i = 0; i < emissionMaxima_.size(); ++i) {
+      if (perLength_) {
+        radianceScale_ = std::max(radianceScale_, emissionMaxima_[i] * voxelSize_);
+      } else if (majorant_.maxDensities()[i] * absorption > 0.0f) {
+        radianceScale_ = std::max(radianceScale_, emissionMaxima_[i] / (majorant_.maxDensities()[i] * absorption));
+      }
+    }
+  }
+  const float emissionScale = policy.relative_weight ? (radianceScale_ > 0.0f ? policy.emission_weight / radianceScale_ : 0.0f)
+                                                     : policy.emission_weight;
   // Capped even at c = 0: past about 1000 collisions per voxel a walk would not end (input_limits.h).
   const float cap = (policy.emission_cap > 0.0f ? policy.emission_cap : 1000.0f) / voxelSize_;
   cellMajorant_.resize(majorant_.cellCount());

@@ -1,5 +1,7 @@
 #include "probes.h"
 
+#include "work.h"
+
 #include "integrator.h"
 #include "input_limits.h"
 #include "phase.h"
@@ -217,6 +219,7 @@ void ProbeSet::gatherKnots(const Ray& ray, float t0, float t1, std::vector<Dista
       const Vec3 off = x - p.center;
       if (glm::dot(off, off) > r2 || t < t0 - radius_ || t > t1 + radius_) continue;
       knots.push_back({t, weight(index, -ray.direction, x)});
+      ++threadWork().knots;
     }
   }
 }

@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>
 
 #include <chrono>
@@ -27,7 +28,10 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   // a preview's override camera builds per ray.
   const bool cachedGuides = !cameraOverride && cameraGuides_.prepare(*scene_, tracer, camera);
 
+  // Each thread's work counters before and after its tiles: summed over the threads that ran them.
+  tbb::enumerable_thread_specific<WorkCounters> passWork;
   auto renderTile = [&](int tile) {
+    const WorkCounters before = threadWork();
     const int x0 = (tile % tilesX) * options_.tileSize, y0 = (tile / tilesX) * options_.tileSize;
     const int x1 = std::min(w, x0 + options_.tileSize), y1 = std::min(h, y0 + options_.tileSize);
     for (int y = y0; y < y1; ++y)
@@ -44,6 +48,14 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
           pass.addSample(x, y, tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng));
         }
       }
+    const WorkCounters& after = threadWork();
+    WorkCounters& mine = passWork.local();
+    mine.samples += static_cast<uint64_t>(x1 - x0) * static_cast<uint64_t>(y1 - y0) * static_cast<uint64_t>(spp);
+    mine.collisions += after.collisions - before.collisions;
+    mine.segments += after.segments - before.segments;
+    mine.rays += after.rays - before.rays;
+    mine.knots += after.knots - before.knots;
+    mine.guided += after.guided - before.guided;
   };
   const int tiles = tilesX * tilesY;
   auto run = [&] {
@@ -63,6 +75,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   if (cancelled) return false;
   pass.setPassSpp(spp);
   film.addPass(pass);
+  for (const WorkCounters& w : passWork) work_ += w;
   return true;
 }
 

@@ -5,6 +5,8 @@
 // whatever the thread count or tile schedule.
 #pragma once
 
+#include "work.h"
+
 #include "camera_guides.h"
 #include "film.h"
 #include "integrator.h"
@@ -34,12 +36,15 @@ class ProgressiveRenderer {
   double renderBudget(Film& film, int spp, double seconds, int passSpp = 1);
 
   const Scene& scene() const { return *scene_; }
+  // The work of every pass rendered so far (work.h): counted, so the same on any machine.
+  const WorkCounters& work() const { return work_; }
   const CameraGuides& cameraGuides() const { return cameraGuides_; }
 
  private:
   std::shared_ptr<const Scene> scene_;
   RenderOptions options_;
   CameraGuides cameraGuides_;  // per-pixel camera-ray guide tables, kept across passes
+  WorkCounters work_;
 };
 
 }  // namespace candela

@@ -216,6 +216,11 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       if (warnings && !scene->probes()->complete()) warnings->push_back(scene->probes()->incompleteWarning());
     }
   }
+  // auto: rules and a pilot decide (after the scene is complete: the pilot renders it).
+  if (needsAutoResolve(desc.strategy)) {
+    scene->autoDecision_ = resolveAutoStrategy(*scene);
+    if (warnings && scene->probes() && !scene->probes()->complete()) warnings->push_back(scene->probes()->incompleteWarning());
+  }
   return scene;
 }
 
@@ -254,6 +259,17 @@ void Scene::setStrategy(const StrategySettings& strategy) {
   const bool probeSettingsChanged = before.probe_spacing != g.probe_spacing || before.probe_radius != g.probe_radius ||
                                     before.probe_samples != g.probe_samples || before.probe_time_cap_s != g.probe_time_cap_s;
   if (g.guide == DistanceGuide::Probes && (!probes() || probeSettingsChanged)) learnProbes();
+}
+
+void Scene::applyStrategy(const StrategySettings& strategy) {
+  // The preset "auto" as chosen decides again, unless it is what this scene already decided.
+  const bool sameAsDecided = autoDecision_ && toJson(strategy) == toJson(desc_.strategy);
+  if (strategy.preset == "auto" && toJson(strategy) == toJson(autoBaseStrategy()) && !sameAsDecided) {
+    autoDecision_ = resolveAutoStrategy(*this);
+    return;
+  }
+  if (strategy.preset != "auto") autoDecision_.reset();
+  setStrategy(strategy);
 }
 
 void Scene::learnProbes() {

@@ -2,6 +2,8 @@
 // their compact grids and majorants, lights, Embree surfaces, camera).
 #pragma once
 
+#include "auto_strategy.h"
+
 #include "lights.h"
 #include "probes.h"
 #include "medium.h"
@@ -11,6 +13,7 @@
 
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -74,6 +77,11 @@ class Scene {
   // Applies new strategy settings, rebuilding only what depends on them (majorants, emission
   // grids, light selection; probes are learned when probe guiding turns on or its settings change).
   void setStrategy(const StrategySettings& strategy);
+  // setStrategy, or for the preset "auto" as chosen (not yet decided here) the auto strategy's
+  // decision (auto_strategy.h). What the viewer and every build call.
+  void applyStrategy(const StrategySettings& strategy);
+  // What `auto` decided for this scene (null when the strategy is not auto).
+  const AutoDecision* autoDecision() const { return autoDecision_ ? &*autoDecision_ : nullptr; }
 
   // The probe set serving renders now (null without probe guiding). Safe to call while a
   // background relearn runs: the old set keeps serving until the new one is swapped in.
@@ -103,6 +111,7 @@ class Scene {
   void buildLightSampler();
   std::unique_ptr<Surfaces> surfaces_;
   bool hasEmissiveMedia_ = false;
+  std::optional<AutoDecision> autoDecision_;
   std::shared_ptr<const ProbeSet> probes_;
   std::thread probeThread_;
   std::atomic<bool> cancelProbes_{false};

@@ -3,7 +3,7 @@
 namespace candela {
 
 const std::vector<std::string>& strategyPresetNames() {
-  static const std::vector<std::string> names{"conventional", "emission", "full", "equiangular"};
+  static const std::vector<std::string> names{"conventional", "emission", "full", "equiangular", "auto"};
   return names;
 }
 
@@ -11,6 +11,8 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
   StrategySettings s;
   s.preset = name;
   if (name == "conventional") return s;  // docs/method.md s.2, "conventional": the baseline
+  // auto: conventional until Scene::build (or a strategy edit) decides (auto_strategy.h).
+  if (name == "auto") return s;
   if (name == "emission" || name == "full" || name == "equiangular") {
     // Talk s.2.1: emission-aware majorant + emission at every collision + NEE toward emissive volumes.
     s.majorant.emission_term = true;

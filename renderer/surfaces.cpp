@@ -1,5 +1,7 @@
 #include "surfaces.h"
 
+#include "work.h"
+
 #include <embree3/rtcore.h>
 
 #include <stdexcept>
@@ -134,6 +136,7 @@ SurfaceHit Surfaces::intersect(const Ray& ray, float tMax) const {
   rh.ray.time = 0.0f;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  ++threadWork().rays;
   rtcIntersect1(impl_->scene, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return out;
   const SurfaceDesc& d = descs_[rh.hit.geomID];
@@ -163,6 +166,7 @@ bool Surfaces::occluded(const Ray& ray, float tMax) const {
   r.mask = 0xFFFFFFFFu;
   r.flags = 0;
   r.time = 0.0f;
+  ++threadWork().rays;
   rtcOccluded1(impl_->scene, &context, &r);
   return r.tfar < 0.0f;
 }

@@ -5,6 +5,8 @@
 // differ only in that callback, never in copies of this loop. Segments with mu_bar = 0 cost nothing.
 #pragma once
 
+#include "work.h"
+
 #include "medium.h"
 #include "rng.h"
 
@@ -124,6 +126,7 @@ bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng
         // 1 - u is exact for our 24-bit uniforms, and logf is several times cheaper than log1pf.
         tc -= std::log(1.0f - rng.uniform()) / muBar;
         if (!(tc < end)) break;
+        ++threadWork().collisions;
         c.t = tc;
         c.p = ray.at(tc);
         c.muBar = muBar;
@@ -136,6 +139,7 @@ bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng
       }
     }
     t = end;
+    ++threadWork().segments;
     // Advance the media whose segment ended; those that left their domain are marked done.
     int live = 0;
     for (int i = 0; i < n; ++i) {

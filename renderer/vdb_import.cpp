@@ -208,7 +208,8 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
   frameCamera(scene.camera, lo, hi, Vec3(0.45f, 0.25f, 1.0f));
 
   if (options.light_rig) scene.lights = {defaultSun(), defaultSky()};
-  scene.strategy = strategyPreset(volume.emission.mode == EmissionMode::None ? "conventional" : "emission");
+  // A new scene: the auto strategy chooses (auto_strategy.h).
+  scene.strategy = strategyPreset("auto");
   if (reportOut) *reportOut = report;
   return scene;
 }

@@ -194,6 +194,7 @@ void RenderSession::workerLoop() {
     frame->height = scene->camera().height();
     frame->seconds = seconds;
     frame->scene = std::make_shared<const SceneDesc>(scene->desc());
+    if (const AutoDecision* d = scene->autoDecision()) frame->autoDecision = d->summary(), frame->autoChoice = d->chosen;
     frame->sceneCenter = scene->center();
     frame->sceneRadius = scene->radius();
     return frame;
@@ -239,7 +240,7 @@ void RenderSession::workerLoop() {
       const SceneDiff diff = diffScenes(scene->desc(), target->desc);
       if (!diff.structure) {
         try {
-          if (diff.strategy) scene->setStrategy(target->desc.strategy);
+          if (diff.strategy) scene->applyStrategy(target->desc.strategy);
           if (diff.camera) scene->setCamera(target->desc.camera);
           if (diff.render) scene->setRender(target->desc.render);
         } catch (const std::exception& e) {

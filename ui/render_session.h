@@ -38,6 +38,8 @@ struct Frame {
   double samplesPerSecond = 0.0;
   bool finished = false;    // a progress limit was reached
   std::shared_ptr<const SceneDesc> scene;  // the settings this frame was rendered with
+  std::string autoDecision;  // with the auto strategy: what it chose and why (AutoDecision::summary)
+  std::string autoChoice;    // ... and the candidate's name
   Vec3 sceneCenter{0.0f};   // bounds of the scene's content, for framing the camera
   float sceneRadius = 1.0f;
 };

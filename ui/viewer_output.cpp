@@ -103,6 +103,7 @@ bool Viewer::screenshot(const std::string& requestedPath) {
       meta["wipe_position"] = std::to_string(canvas_.wipePosition());
     }
     if (!importSummary_.empty()) meta["opened_volume"] = importSummary_;
+    if (!frame_->autoDecision.empty()) meta["auto_decision"] = frame_->autoDecision;
     if (frame_->scene) {
       meta["strategy"] = toJson(frame_->scene->strategy).dump();
       SceneDesc shown = *frame_->scene;

@@ -229,6 +229,12 @@ void Viewer::drawPanel() {
   if (!compare_ && ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
     ParamEditor editor;
     editor.choices["preset"] = strategyPresetNames();
+    if (frame_ && !frame_->autoDecision.empty() && edited_.strategy.preset == "auto") {
+      // What auto decided, and why: the fields below are its choice.
+      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.6f, 0.85f, 1.0f, 1.0f));
+      ImGui::TextWrapped("%s", frame_->autoDecision.c_str());
+      ImGui::PopStyleColor();
+    }
     edited_.strategy.visit(editor);
     if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
     changed |= editor.changed;
@@ -304,7 +310,8 @@ void Viewer::drawStatusBar() {
     char latency[32] = "-";
     if (!latencies_.empty()) std::snprintf(latency, sizeof(latency), "%.0f ms", lastLatencyMs_);
     ImGui::Text("%s%s | %s | %dx%d | %d spp%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %s | UI %.0f fps%s",
-                dirty_ ? "* " : "", (documentPath_.empty() ? scenePath_ : documentPath_).c_str(), frame_->scene ? frame_->scene->strategy.preset.c_str() : "", frame_->width, frame_->height,
+                dirty_ ? "* " : "", (documentPath_.empty() ? scenePath_ : documentPath_).c_str(),
+                frame_->scene ? (frame_->autoChoice.empty() ? frame_->scene->strategy.preset : "auto: " + frame_->autoChoice).c_str() : "", frame_->width, frame_->height,
                 frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
                 frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
                 session_.loading() ? " | loading..." : "");

@@ -1,0 +1,212 @@
+#include "auto_strategy.h"
+
+#include "integrator.h"
+#include "renderer.h"
+#include "scene.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace candela {
+
+double WorkCounters::cost() const {
+  // Nanoseconds per operation on one core of the calibration machine (candela-cli calibrate: a
+  // least-squares fit of pass time against these counts over the report scenes and presets).
+  // Fitted 2026-12-01 on the 2-core development machine (worst relative error 17% over 40 scene x
+  // strategy rows); only ratios matter to the pilot.
+  return 57.0 * static_cast<double>(samples) + 105.0 * static_cast<double>(collisions) + 30.0 * static_cast<double>(segments) +
+         83.0 * static_cast<double>(rays) + 148.0 * static_cast<double>(knots) + 217.0 * static_cast<double>(guided);
+}
+
+std::string AutoDecision::summary() const {
+  std::string s = "auto chose " + chosen;
+  for (size_t i = 0; i < reasons.size(); ++i) s += (i == 0 ? ": " : "; ") + reasons[i];
+  if (!pilot.empty()) {
+    s += "; pilot (" + std::to_string(pilotWidth) + "x" + std::to_string(pilotHeight) + ", " + std::to_string(pilotSpp) +
+         " spp) efficiency";
+    for (const auto& m : pilot) {
+      char buf[96];
+      std::snprintf(buf, sizeof(buf), " %s %.2f,", m.name.c_str(), m.efficiency);
+      s += buf;
+    }
+    s.pop_back();
+  }
+  return s;
+}
+
+StrategySettings autoBaseStrategy() {
+  StrategySettings s = strategyPreset("conventional");
+  s.preset = "auto";
+  return s;
+}
+
+bool needsAutoResolve(const StrategySettings& s) { return s.preset == "auto" && toJson(s) == toJson(autoBaseStrategy()); }
+
+namespace {
+
+StrategySettings named(const char* preset) {
+  StrategySettings s = strategyPreset(preset);
+  s.preset = "auto";
+  return s;
+}
+
+// The share of camera rays (a 32 x 18 grid over the image) that cross a medium with a majorant
+// optical depth of at most `maxDepth`, among those that cross one at all.
+double thinRayShare(const Scene& scene, float maxDepth) {
+  PathTracer tracer(scene);
+  const Camera& cam = scene.camera();
+  int crossing = 0, thin = 0;
+  for (int j = 0; j < 18; ++j)
+    for (int i = 0; i < 32; ++i) {
+      const Ray r = cam.generate((i + 0.5f) * cam.width() / 32.0f, (j + 0.5f) * cam.height() / 18.0f);
+      const float depth = tracer.mediaOpticalDepth(r);
+      if (depth < 0.0f) continue;
+      ++crossing;
+      if (depth <= maxDepth) ++thin;
+    }
+  return crossing ? static_cast<double>(thin) / crossing : 0.0;
+}
+
+}  // namespace
+
+std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::string>& reasons) {
+  std::vector<AutoCandidate> out;
+  const bool emissive = scene.hasEmissiveMedia();
+  StrategySettings base = named(emissive ? "emission" : "conventional");
+  if (emissive) {
+    base.majorant.relative_weight = true;
+    base.majorant.emission_weight = kAutoRelativeEmissionWeight;
+    reasons.push_back("volumes emit: emission sampling on (relative emission weight " + std::to_string(kAutoRelativeEmissionWeight).substr(0, 4) +
+                      ")");
+  } else {
+    reasons.push_back("no volume emits: no emission sampling");
+  }
+  out.push_back({emissive ? "emission" : "conventional", base});
+
+  bool scatters = false;
+  for (const Medium* m : scene.media().media) scatters |= m->albedoAverage() > 0.0f;
+  const bool lit = !scene.lights().empty() || !scene.volumeLights().empty() || emissive;
+  if (!scatters || !lit) {
+    reasons.push_back(scatters ? "no lights: no scattering sampling" : "no volume scatters: no scattering sampling");
+    return out;
+  }
+  const float maxDepth = base.guiding.max_optical_depth;
+  const double share = thinRayShare(scene, maxDepth);
+  char why[160];
+  if (share < 0.5) {
+    std::snprintf(why, sizeof(why), "%.0f%% of camera rays through the media are thinner than %.0f optical depths: no probes", 100.0 * share,
+                  maxDepth);
+    reasons.push_back(why);
+    return out;
+  }
+  std::snprintf(why, sizeof(why), "%.0f%% of camera rays are thin enough for scattering sampling: pilot", 100.0 * share);
+  reasons.push_back(why);
+  StrategySettings full = base;
+  const StrategySettings fullPreset = strategyPreset("full");
+  full.guiding = fullPreset.guiding;
+  out.push_back({"full", full});
+  StrategySettings deep = full;
+  deep.guiding.guided_segments = 8;
+  out.push_back({"full, guided_segments 8", deep});
+  StrategySettings equi = base;
+  equi.guiding.guide = DistanceGuide::EquiAngular;
+  out.push_back({"equiangular", equi});
+  return out;
+}
+
+namespace {
+AutoDecision decide(Scene& scene);
+}  // namespace
+
+AutoDecision resolveAutoStrategy(Scene& scene) {
+  const auto start = std::chrono::steady_clock::now();
+  AutoDecision d = decide(scene);
+  d.pilotSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return d;
+}
+
+namespace {
+
+AutoDecision decide(Scene& scene) {
+  AutoDecision d;
+  std::vector<AutoCandidate> candidates = autoCandidates(scene, d.reasons);
+  if (candidates.size() == 1) {
+    d.chosen = candidates[0].name;
+    scene.setStrategy(candidates[0].strategy);
+    return d;
+  }
+  // The pilot: a small image of the same view (about 128 x 72), 8 spp per candidate, same seed.
+  const CameraDesc full = scene.desc().camera;
+  CameraDesc small = full;
+  const double scale = std::min(1.0, std::sqrt(128.0 * 72.0 / (static_cast<double>(full.resolution.first) * full.resolution.second)));
+  small.resolution = {std::max(8, static_cast<int>(std::lround(full.resolution.first * scale))),
+                      std::max(8, static_cast<int>(std::lround(full.resolution.second * scale)))};
+  scene.setCamera(small);
+  d.pilotWidth = small.resolution.first, d.pilotHeight = small.resolution.second, d.pilotSpp = 8;
+  for (const AutoCandidate& c : candidates) {
+    const bool hadProbes = scene.probes() != nullptr;
+    scene.setStrategy(c.strategy);
+    if (!hadProbes && scene.probes()) d.probeSeconds += scene.probes()->learnSeconds();
+    ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
+    Film film;
+    renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
+    // Variance per sample, pooled over 8 x 8-pixel regions: sum of the pixels' sample variances over
+    // the squared region mean (+ the relMSE epsilon), averaged over regions.
+    const int w = film.width(), h = film.height(), n = film.spp();
+    const std::vector<float>& sum = film.sum();
+    const std::vector<float>& sumSq = film.sumSquares();
+    double imageMean = 0.0;
+    for (float v : sum) imageMean += v / n;
+    imageMean /= std::max<size_t>(1, sum.size());
+    const double eps = (0.01 * imageMean) * (0.01 * imageMean) + 1e-30;
+    double total = 0.0;
+    int regions = 0;
+    for (int ry = 0; ry < h; ry += 8)
+      for (int rx = 0; rx < w; rx += 8) {
+        double var = 0.0, mean = 0.0;
+        int count = 0;
+        for (int y = ry; y < std::min(h, ry + 8); ++y)
+          for (int x = rx; x < std::min(w, rx + 8); ++x)
+            for (int ch = 0; ch < 3; ++ch, ++count) {
+              const size_t i = 3 * (static_cast<size_t>(y) * w + x) + ch;
+              const double m = sum[i] / n;
+              var += std::max(0.0, (sumSq[i] / n - m * m) * n / (n - 1.0));
+              mean += m;
+            }
+        mean /= count;
+        total += (var / count) / (mean * mean + eps);
+        ++regions;
+      }
+    AutoMeasurement m;
+    m.name = c.name;
+    m.relativeVariance = total / std::max(1, regions);
+    const WorkCounters& work = renderer.work();
+    m.workPerSample = work.cost() / std::max<double>(1.0, static_cast<double>(work.samples));
+    m.efficiency = 1.0 / std::max(1e-300, m.relativeVariance * m.workPerSample);
+    d.pilotWork += work.cost();
+    d.pilot.push_back(m);
+  }
+  // The most efficient candidate, but a more elaborate one only when it beats the first (the plain
+  // one the rules chose) by kAutoMargin: the pilot's variance and the work model (17% worst error)
+  // are estimates, and a near tie is not worth probes or deeper guiding.
+  double best = 0.0;
+  size_t chosen = 0;
+  for (size_t i = 0; i < d.pilot.size(); ++i)
+    if (d.pilot[i].efficiency > best) best = d.pilot[i].efficiency, chosen = i;
+  if (chosen != 0 && best < kAutoMargin * d.pilot[0].efficiency) {
+    chosen = 0;
+    d.reasons.push_back("no candidate beat " + candidates[0].name + " by " + std::to_string(static_cast<int>(std::lround(100.0 * (kAutoMargin - 1.0)))) +
+                        "% in the pilot");
+  }
+  for (auto& m : d.pilot) m.efficiency /= best;
+  d.chosen = candidates[chosen].name;
+  scene.setCamera(full);
+  scene.setStrategy(candidates[chosen].strategy);
+  return d;
+}
+
+}  // namespace
+
+}  // namespace candela

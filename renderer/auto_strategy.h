@@ -1,0 +1,70 @@
+// The `auto` strategy: Candela chooses the sampling strategy for the scene, so artists need not know
+// which preset, emission weight or guided depth suits their shot. Two steps:
+// 1. Rules from the scene: emission sampling only when some volume emits (a scene without emission
+//    never builds emission structures), with the emission weight relative to each medium's emission
+//    scale; scattering (distance) sampling only when some volume scatters a light and enough camera
+//    rays are thin enough for it to help (a thick cloud never learns probes).
+// 2. A pilot: each remaining candidate renders a few samples per pixel of a small image; its variance
+//    (from the film's sums of squares, pooled per region) times its work (work.h: counted, never
+//    timed) ranks it, and the most efficient is kept. The same seed gives the same decision on any
+//    machine and thread count.
+// Every candidate is an unbiased strategy: the choice changes the noise, never the image.
+#pragma once
+
+#include "settings.h"
+
+#include <string>
+#include <vector>
+
+namespace candela {
+
+class Scene;
+
+struct AutoCandidate {
+  std::string name;  // "emission", "full", "full, guided_segments 8", ...
+  StrategySettings strategy;
+};
+
+struct AutoMeasurement {
+  std::string name;
+  double relativeVariance = 0.0;  // per sample: pooled region variance / (region mean^2 + eps)
+  double workPerSample = 0.0;     // WorkCounters::cost() per camera sample
+  double efficiency = 0.0;        // 1 / (relativeVariance x workPerSample), relative to the best
+};
+
+struct AutoDecision {
+  std::string chosen;
+  std::vector<std::string> reasons;        // the scene rules that decided the candidates
+  std::vector<AutoMeasurement> pilot;      // empty when a single candidate needed no pilot
+  double pilotWork = 0.0;                  // cost of the pilot in work units (ns on the calibration core)
+  // Wall time of the rules, any probe learning and the pilot: reported, and charged to auto's time
+  // in bench and report; never read to decide.
+  double pilotSeconds = 0.0;
+  // Of which learning probes for guided candidates: what a fixed guided preset also spends building
+  // its scene, so bench and report charge auto only pilotSeconds - probeSeconds, as they charge no
+  // preset its build.
+  double probeSeconds = 0.0;
+  int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;
+  // One line: "auto chose emission: volumes emit; ...; pilot: emission 1.00, full 0.62".
+  std::string summary() const;
+};
+
+// The emission weight auto uses, relative to each medium's emission scale (relative_weight): the
+// value the sweep in README ("The auto strategy") measured best on fire, torch-in-mist and glow-box.
+inline constexpr float kAutoRelativeEmissionWeight = 1.0f;
+// How much more efficient than the plain candidate an elaborate one must be in the pilot.
+inline constexpr double kAutoMargin = 1.2;
+
+// The settings `auto` starts from (before rules and pilot): conventional, named "auto".
+StrategySettings autoBaseStrategy();
+// True for settings that still need resolving (the preset "auto" as chosen, not yet decided).
+bool needsAutoResolve(const StrategySettings& s);
+
+// The candidates the scene rules leave, with the reasons.
+std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::string>& reasons);
+
+// Decides for `scene` (rules, then the pilot when more than one candidate remains), applies the
+// choice with scene.setStrategy (preset stays "auto") and returns what it decided.
+AutoDecision resolveAutoStrategy(Scene& scene);
+
+}  // namespace candela

@@ -1,0 +1,34 @@
+// Work counted instead of time: what a sample cost, in operations whose count does not depend on
+// the machine or its load. The auto strategy's pilot (auto_strategy.h) compares strategies by
+// variance x work, so its decision is the same on an idle or a busy machine. Counters are per
+// thread (no sharing in the hot loop); ProgressiveRenderer sums them over a pass.
+#pragma once
+
+#include <cstdint>
+
+namespace candela {
+
+struct WorkCounters {
+  uint64_t samples = 0;     // camera samples
+  uint64_t collisions = 0;  // tentative collisions (a density lookup each, per medium)
+  uint64_t segments = 0;    // majorant DDA segments walked
+  uint64_t rays = 0;        // surface rays traced (Embree intersect or occlusion)
+  uint64_t knots = 0;       // probe knots gathered into guided distance densities
+  uint64_t guided = 0;      // guided distance samples drawn (a table lookup and a vertex each)
+
+  WorkCounters& operator+=(const WorkCounters& o) {
+    samples += o.samples, collisions += o.collisions, segments += o.segments, rays += o.rays, knots += o.knots, guided += o.guided;
+    return *this;
+  }
+  // The cost in nanoseconds of one core of the calibration machine: constants fitted once by least
+  // squares against render time (candela-cli calibrate, README "The auto strategy"); never the clock.
+  double cost() const;
+};
+
+// This thread's counters (the hot loop adds to them; renderPass collects them).
+inline WorkCounters& threadWork() {
+  thread_local WorkCounters counters;
+  return counters;
+}
+
+}  // namespace candela
