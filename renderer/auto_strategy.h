@@ -51,7 +51,7 @@ struct AutoDecision {
 
 // The emission weight auto uses, relative to each medium's emission scale (relative_weight): the
 // value the sweep in README ("The auto strategy") measured best on fire, torch-in-mist and glow-box.
-inline constexpr float kAutoRelativeEmissionWeight = 1.0f;
+inline constexpr float kAutoRelativeEmissionWeight = 3.0f;
 // How much more efficient than the plain candidate an elaborate one must be in the pilot.
 inline constexpr double kAutoMargin = 1.2;
 

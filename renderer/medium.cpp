@@ -72,17 +72,19 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   // mu_bar = max(maj(mu_t), min(k * maj(mu_a lum(Le)), c / voxel_size)); rounded up by a few ulps so
   // float rounding in the trilinear lerp can never exceed maj(mu_t).
   const float scale = desc_.sigma_t_scale * policy.safety_factor * (1.0f + 4e-7f);
-  // The radiance scale: the brightest cell's source per unit of its densest mu_a (a bound on Le
-  // there), or per unit length the brightest E times a voxel.
+  // The radiance scale: the mean Le over the emitting cells, weighted by their absorption (the sum of
+  // the cells' source maxima over the sum of their mu_a maxima), or per unit length the mean E over
+  // emitting cells times a voxel. A mean, not the peak: a flame whose few hottest voxels outshine the
+  // rest by 30x still gets collisions where most of its light comes from.
   if (!emissionMaxima_.empty() && radianceScale_ == 0.0f) {
     const float absorption = desc_.sigma_t_scale * (1.0f - albedoAverage_);
+    double source = 0.0, weight = 0.0;
     for (size_t i = 0; i < emissionMaxima_.size(); ++i) {
-      if (perLength_) {
-        radianceScale_ = std::max(radianceScale_, emissionMaxima_[i] * voxelSize_);
-      } else if (majorant_.maxDensities()[i] * absorption > 0.0f) {
-        radianceScale_ = std::max(radianceScale_, emissionMaxima_[i] / (majorant_.maxDensities()[i] * absorption));
-      }
+      if (!(emissionMaxima_[i] > 0.0f)) continue;
+      source += emissionMaxima_[i];
+      weight += perLength_ ? 1.0 / voxelSize_ : static_cast<double>(majorant_.maxDensities()[i]) * absorption;
     }
+    radianceScale_ = weight > 0.0 ? static_cast<float>(source / weight) : 0.0f;
   }
   const float emissionScale = policy.relative_weight ? (radianceScale_ > 0.0f ? policy.emission_weight / radianceScale_ : 0.0f)
                                                      : policy.emission_weight;

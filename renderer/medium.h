@@ -50,8 +50,9 @@ class Medium {
     if (!(c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f && c.x < res.x && c.y < res.y && c.z < res.z)) return 0.0f;
     return cellMajorant_[static_cast<size_t>(majorant_.cellIndex(static_cast<int>(c.x), static_cast<int>(c.y), static_cast<int>(c.z)))];
   }
-  // The radiance scale of the medium's emission: its brightest Le (radiance units), or its brightest
-  // E times the voxel size (per unit length). The emission weight's unit when it is relative.
+  // The radiance scale of the medium's emission: its mean Le over emitting cells weighted by mu_a
+  // (radiance units), or its mean E times the voxel size (per unit length). The emission weight's
+  // unit when it is relative.
   float emissionRadianceScale() const { return radianceScale_; }
   // Geometric-mean voxel edge in world units (the emission cap's c / voxel_size).
   float voxelSize() const { return voxelSize_; }
