@@ -13,11 +13,11 @@ namespace candela {
 
 double WorkCounters::cost() const {
   // Nanoseconds per operation on one core of the calibration machine (candela-cli calibrate: a
-  // least-squares fit of pass time against these counts over the report scenes and presets).
-  // Fitted 2026-12-01 on the 2-core development machine (worst relative error 17% over 40 scene x
-  // strategy rows); only ratios matter to the pilot.
-  return 57.0 * static_cast<double>(samples) + 105.0 * static_cast<double>(collisions) + 30.0 * static_cast<double>(segments) +
-         83.0 * static_cast<double>(rays) + 148.0 * static_cast<double>(knots) + 217.0 * static_cast<double>(guided);
+  // least-squares fit of pass time against these counts over the report scenes and presets; worst
+  // relative error 18-20%, fitted 2026-12-01 on the 2-core development machine). Only ratios matter.
+  return 60.0 * static_cast<double>(samples) + 100.0 * static_cast<double>(collisions) + 32.0 * static_cast<double>(segments) +
+         77.0 * static_cast<double>(rays) + 145.0 * static_cast<double>(knots) + 170.0 * static_cast<double>(guided) +
+         18.0 * static_cast<double>(guides);
 }
 
 std::string AutoDecision::summary() const {
@@ -152,15 +152,17 @@ AutoDecision decide(Scene& scene) {
     ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
-    // Variance per sample, pooled over 8 x 8-pixel regions: sum of the pixels' sample variances over
-    // the squared region mean (+ the relMSE epsilon), averaged over regions.
+    // Variance per sample, pooled over 8 x 8-pixel regions: the pixels' mean sample variance over the
+    // squared region mean (+ the relMSE epsilon), averaged over regions: the expected relMSE of one
+    // sample per pixel.
     const int w = film.width(), h = film.height(), n = film.spp();
     const std::vector<float>& sum = film.sum();
     const std::vector<float>& sumSq = film.sumSquares();
     double imageMean = 0.0;
     for (float v : sum) imageMean += v / n;
     imageMean /= std::max<size_t>(1, sum.size());
-    const double eps = (0.01 * imageMean) * (0.01 * imageMean) + 1e-30;
+    // The relMSE's epsilon (convergence.h), so the pilot ranks as the report's relMSE does.
+    const double eps = (0.1 * imageMean) * (0.1 * imageMean) + 1e-30;
     double total = 0.0;
     int regions = 0;
     for (int ry = 0; ry < h; ry += 8)

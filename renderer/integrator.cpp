@@ -370,6 +370,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const PiecewiseLi
   const GuidingSettings& g = scene_.strategy().guiding;
   if (g.guide == DistanceGuide::None || st.segment >= g.guided_segments || st.lightsTaken || st.vertices >= scene_.render().max_depth)
     return false;
+  ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table
   float tIn = 0.0f, tOut = 0.0f;
   if (st.segment == 0 && cameraGuide) {
     // The pixel's cached table (camera_guides.h), mapped onto this ray's own medium interval; the

@@ -56,6 +56,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
     mine.rays += after.rays - before.rays;
     mine.knots += after.knots - before.knots;
     mine.guided += after.guided - before.guided;
+    mine.guides += after.guides - before.guides;
   };
   const int tiles = tilesX * tilesY;
   auto run = [&] {

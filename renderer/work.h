@@ -15,9 +15,10 @@ struct WorkCounters {
   uint64_t rays = 0;        // surface rays traced (Embree intersect or occlusion)
   uint64_t knots = 0;       // probe knots gathered into guided distance densities
   uint64_t guided = 0;      // guided distance samples drawn (a table lookup and a vertex each)
+  uint64_t guides = 0;      // ray segments that prepared a guided density (interval, thickness walk)
 
   WorkCounters& operator+=(const WorkCounters& o) {
-    samples += o.samples, collisions += o.collisions, segments += o.segments, rays += o.rays, knots += o.knots, guided += o.guided;
+    samples += o.samples, collisions += o.collisions, segments += o.segments, rays += o.rays, knots += o.knots, guided += o.guided, guides += o.guides;
     return *this;
   }
   // The cost in nanoseconds of one core of the calibration machine: constants fitted once by least

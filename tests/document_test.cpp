@@ -17,13 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("candela-document-" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 TEST(EditHistory, UndoRedoAndDropsRedoOnANewEdit) {
   EditHistory h;
   h.reset({{"g", 0}});
@@ -71,7 +64,7 @@ TEST(EditHistory, KeepsAtMostItsLimit) {
 }
 
 TEST(Snapshots, KeptOnDiskWithTheirLookAndReadBack) {
-  const fs::path dir = scratch("snapshots");
+  const fs::path dir = test::scratchDirectory("snapshots");
   Image image;
   image.width = 4, image.height = 2;
   image.rgb.assign(24, 0.25f);
@@ -112,7 +105,7 @@ TEST(Sequences, PatternsSubstituteAndFindFramesOnDisk) {
   EXPECT_EQ(substituteFrame("fire.####.vdb", 12345), "fire.12345.vdb");
   EXPECT_EQ(substituteFrame("fire.vdb", 3), "fire.vdb");
 
-  const fs::path dir = scratch("sequence");
+  const fs::path dir = test::scratchDirectory("sequence");
   for (const char* f : {"smoke.0003.vdb", "smoke.0004.vdb", "smoke.0006.vdb", "smoke.0004.vdb.bak", "smoke.00x5.vdb", "smoke.vdb"})
     std::ofstream(dir / f) << "x";
   const FrameRange r = findFrames((dir / "smoke.####.vdb").string());
@@ -129,7 +122,7 @@ TEST(Sequences, PatternsSubstituteAndFindFramesOnDisk) {
 
 TEST(Sequences, ASceneRendersTheFrameItNames) {
   // Two frames that differ (constant densities 1 and 4): render.frame picks the file.
-  const fs::path dir = scratch("frames");
+  const fs::path dir = test::scratchDirectory("frames");
   for (int f = 1; f <= 2; ++f) {
     GeneratorDesc gen;
     gen.type = "constant";

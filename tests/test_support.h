@@ -6,6 +6,9 @@
 #include "stats.h"
 
 #include <cmath>
+#include <filesystem>
+
+#include <unistd.h>
 
 #include <string>
 #include <vector>
@@ -13,6 +16,14 @@
 namespace candela::test {
 
 inline std::string assetPath(const std::string& relative) { return std::string(CANDELA_SOURCE_DIR) + "/" + relative; }
+
+// An empty scratch directory for this test process: TMP/candela-test-PID/NAME.
+inline std::filesystem::path scratchDirectory(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("candela-test-" + std::to_string(::getpid())) / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
 
 inline SceneDesc loadScene(const std::string& relative, const std::vector<std::string>& settings = {}) {
   return loadSceneDesc(assetPath(relative), settings);

@@ -16,12 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("candela-workflow-" + std::to_string(::getpid())) / name;
-  fs::create_directories(dir);
-  return dir;
-}
-
 // A file shaped like a Blender Mantaflow bake: Z-up, a plume taller along Z than wide, grids
 // density, flame, heat and a vec3 velocity, and Blender's metadata keys.
 void writeBlenderLikeVdb(const std::string& path, bool blenderMetadata) {
@@ -51,7 +45,7 @@ void writeBlenderLikeVdb(const std::string& path, bool blenderMetadata) {
 }
 
 TEST(OpenVdb, RecognisesBlenderGridsAndTurnsZUpToYUp) {
-  const fs::path dir = scratch("zup");
+  const fs::path dir = test::scratchDirectory("zup");
   const std::string path = (dir / "fire_0001.vdb").string();
   writeBlenderLikeVdb(path, true);
   VdbImportReport report;
@@ -100,7 +94,7 @@ TEST(OpenVdb, RecognisesBlenderGridsAndTurnsZUpToYUp) {
 }
 
 TEST(OpenVdb, EachGeneratorWrittenToVdbOpensAndRenders) {
-  const fs::path dir = scratch("generators");
+  const fs::path dir = test::scratchDirectory("generators");
   for (const char* type : {"constant", "ramp", "torch", "mist", "cloud", "plume"}) {
     GeneratorDesc gen;
     gen.type = type;
@@ -121,7 +115,7 @@ TEST(OpenVdb, EachGeneratorWrittenToVdbOpensAndRenders) {
 }
 
 TEST(OpenVdb, AFileWithoutADensityGridNamesTheGridsItHolds) {
-  const fs::path dir = scratch("nodensity");
+  const fs::path dir = test::scratchDirectory("nodensity");
   openvdb::initialize();
   auto a = openvdb::FloatGrid::create(0.0f), b = openvdb::FloatGrid::create(0.0f);
   a->setName("pressure"), b->setName("divergence");
@@ -143,7 +137,7 @@ TEST(OpenVdb, AFileWithoutADensityGridNamesTheGridsItHolds) {
 TEST(SaveScene, SavedSceneReopensToTheSameImage) {
   // An opened VDB with edits, saved into another directory: the relative VDB path is rewritten and
   // the reopened scene renders the identical image (same seed, same spp).
-  const fs::path dir = scratch("save");
+  const fs::path dir = test::scratchDirectory("save");
   GeneratorDesc gen;
   gen.type = "plume";
   gen.resolution = 24;
@@ -174,7 +168,7 @@ TEST(SaveScene, SavedSceneReopensToTheSameImage) {
 TEST(SaveScene, ASceneFileRoundTripsEveryField) {
   for (const char* name : {"torch-in-mist", "god-rays", "fire", "cloud"}) {
     const SceneDesc scene = test::loadScene(std::string("assets/scenes/") + name + ".json");
-    const fs::path dir = scratch("roundtrip");
+    const fs::path dir = test::scratchDirectory("roundtrip");
     const SceneDesc saved = saveSceneDesc(scene, (dir / (std::string(name) + ".json")).string());
     EXPECT_EQ(sceneToJson(loadSceneDesc(saved.path)), sceneToJson(saved)) << name;
   }
@@ -185,7 +179,7 @@ TEST(ExrLayers, VarianceAndSppTravelWithTheImage) {
   scene.camera.resolution = {8, 6};
   const Film film = test::render(scene, 16, 1);
   const Image image = film.image();
-  const fs::path path = scratch("exr") / "layers.exr";
+  const fs::path path = test::scratchDirectory("exr") / "layers.exr";
   writeExr(path.string(), image);
   const Image back = readExr(path.string());
   ASSERT_EQ(back.channels.count("variance.R"), 1u);

@@ -129,6 +129,7 @@ class Viewer {
   bool writeFigure(const std::string& path);
   void captureFigure();
   void captureCanvas();
+  DisplayImage readCanvas() const;
   std::optional<std::string> canvasCaptureRequest_;
 
   float imageAspect() const;

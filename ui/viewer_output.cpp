@@ -20,24 +20,30 @@ bool Viewer::writeFigure(const std::string& path) {
   return true;
 }
 
+// The image area of the frame just drawn (before the swap), as the window shows it.
+DisplayImage Viewer::readCanvas() const {
+  const auto [x, y, w, h] = canvas_.framebufferRect(canvas_.rect());
+  DisplayImage image;
+  image.width = w;
+  image.height = h;
+  std::vector<uint8_t> rows(3 * static_cast<size_t>(w) * h);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(x, y, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+  image.rgb8.resize(rows.size());
+  for (int row = 0; row < h; ++row)  // GL reads bottom-up
+    std::copy_n(rows.begin() + 3 * static_cast<size_t>(h - 1 - row) * w, 3 * static_cast<size_t>(w),
+                image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
+  return image;
+}
+
 // Reads the panes and their labels back from the frame just drawn (before the swap): the figure is
 // what the window shows. Writes PATH.png, one EXR per pane and the error series as CSV.
 void Viewer::captureFigure() {
   const std::string path = *figureRequest_;
   figureRequest_.reset();
   try {
-    const auto [x, y, w, h] = canvas_.framebufferRect(canvas_.rect());
-    DisplayImage image;
-    image.width = w;
-    image.height = h;
-    std::vector<uint8_t> rows(3 * static_cast<size_t>(w) * h);
-    glReadBuffer(GL_BACK);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(x, y, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
-    image.rgb8.resize(rows.size());
-    for (int row = 0; row < h; ++row)  // GL reads bottom-up
-      std::copy_n(rows.begin() + 3 * static_cast<size_t>(h - 1 - row) * w, 3 * static_cast<size_t>(w),
-                  image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
+    DisplayImage image = readCanvas();
     Json panes = Json::array();
     for (const auto& p : compFrame_->panes) {
       Json j{{"label", p.label}, {"seconds", p.seconds}, {"last_slice_seconds", p.lastSlice}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
@@ -139,18 +145,7 @@ void Viewer::captureCanvas() {
   const std::string path = *canvasCaptureRequest_;
   canvasCaptureRequest_.reset();
   try {
-    const auto [x, y, w, h] = canvas_.framebufferRect(canvas_.rect());
-    DisplayImage image;
-    image.width = w;
-    image.height = h;
-    std::vector<uint8_t> rows(3 * static_cast<size_t>(w) * h);
-    glReadBuffer(GL_BACK);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(x, y, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
-    image.rgb8.resize(rows.size());
-    for (int row = 0; row < h; ++row)  // GL reads bottom-up
-      std::copy_n(rows.begin() + 3 * static_cast<size_t>(h - 1 - row) * w, 3 * static_cast<size_t>(w),
-                  image.rgb8.begin() + 3 * static_cast<size_t>(row) * w);
+    DisplayImage image = readCanvas();
     if (const Snapshot* snap = snapshots_.find(comparedSnapshot_)) {
       image.metadata["compared_snapshot"] = snap->label;
       image.metadata["compare_mode"] = canvas_.wipe() ? "wipe" : "side by side";
