@@ -2,6 +2,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
+
 namespace candela {
 
 Mat4 transformMatrix(const TransformDesc& t) {
@@ -101,8 +103,23 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   }
 }
 
+void Medium::setColorGrids(VoxelGrid r, VoxelGrid g, VoxelGrid b) {
+  colorR_ = std::move(r), colorG_ = std::move(g), colorB_ = std::move(b);
+  colorFromDensityIndex_ = glm::inverse(colorR_.worldFromIndex()) * density_.worldFromIndex();
+  // The emission maxima, light and scale were built with a uniform colour: the next applyStrategy
+  // rebuilds them.
+  emissionMaxima_.clear();
+  radianceScale_ = 0.0f;
+  emissionLight_.reset();
+}
+
 Medium::Sampler::Sampler(const Medium& m)
-    : medium_(&m), density_(m.density_.sampler()), aux_(m.aux_.valid() ? m.aux_.sampler() : m.density_.sampler()) {}
+    : medium_(&m),
+      density_(m.density_.sampler()),
+      aux_(m.aux_.valid() ? m.aux_.sampler() : m.density_.sampler()),
+      colorR_(m.colorR_.valid() ? m.colorR_.sampler() : m.density_.sampler()),
+      colorG_(m.colorG_.valid() ? m.colorG_.sampler() : m.density_.sampler()),
+      colorB_(m.colorB_.valid() ? m.colorB_.sampler() : m.density_.sampler()) {}
 
 float Medium::Sampler::sourceLuminanceAtVoxel(int x, int y, int z) const {
   const Medium& m = *medium_;
@@ -122,7 +139,14 @@ Rgb Medium::Sampler::emission(const Vec3& indexPos) const {
     if (!(value > 0.0f)) return Rgb(0.0f);
     return blackbody()(value * e.temperature_scale + e.temperature_offset) * e.intensity;
   }
-  return e.color * (std::max(value, 0.0f) * e.intensity);
+  Rgb color = e.color;
+  if (m.colorR_.valid()) {
+    // Cd at the point, clamped to [0, 1e6] per channel (a colour, not a light).
+    const Vec3 q = Vec3(m.colorFromDensityIndex_ * glm::vec4(indexPos, 1.0f));
+    color *= Rgb(std::clamp(colorR_.trilinear(q), 0.0f, 1e6f), std::clamp(colorG_.trilinear(q), 0.0f, 1e6f),
+                 std::clamp(colorB_.trilinear(q), 0.0f, 1e6f));
+  }
+  return color * (std::max(value, 0.0f) * e.intensity);
 }
 
 }  // namespace candela

@@ -19,6 +19,9 @@ class Medium {
   // `temperature` / `emission` may be invalid grids when the emission mode does not use them.
   Medium(const VolumeDesc& desc, VoxelGrid density, VoxelGrid temperature, VoxelGrid emission);
 
+  // Per-voxel emission colour (color_grid: Cd's x, y, z), multiplying grid emission. Call before
+  // applyStrategy builds anything from the emission (Scene::build does).
+  void setColorGrids(VoxelGrid r, VoxelGrid g, VoxelGrid b);
   const VolumeDesc& desc() const { return desc_; }
   const std::string& name() const { return desc_.name; }
   const VoxelGrid& densityGrid() const { return density_; }
@@ -84,11 +87,14 @@ class Medium {
     const Medium* medium_;
     VoxelGrid::Sampler density_;
     VoxelGrid::Sampler aux_;
+    VoxelGrid::Sampler colorR_, colorG_, colorB_;
   };
 
  private:
   VolumeDesc desc_;
   VoxelGrid density_, aux_;  // aux: temperature (blackbody) or emission grid
+  VoxelGrid colorR_, colorG_, colorB_;  // optional per-voxel emission colour (grid mode)
+  Mat4 colorFromDensityIndex_{1.0f};
   Mat4 worldFromIndex_{1.0f}, indexFromWorld_{1.0f};
   Mat4 auxFromDensityIndex_{1.0f};
   bool auxSameIndex_ = true;

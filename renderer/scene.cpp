@@ -148,7 +148,16 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     VoxelGrid temperatureGrid, emissionGrid;
     if (v.emission.mode == EmissionMode::Blackbody) temperatureGrid = grids[1].grid;
     if (v.emission.mode == EmissionMode::Grid) emissionGrid = grids[1].grid;
+    std::vector<LoadedGrid> color;
+    if (v.emission.mode == EmissionMode::Grid && !v.color_grid.empty() && !v.has_generator) {
+      try {
+        color = loadVdbVectorGrid(path, v.color_grid, field + ".color_grid");
+      } catch (const InputError& e) {
+        throw InputError(desc.path + ": " + e.what());
+      }
+    }
     auto medium = std::make_unique<Medium>(v, grids[0].grid, temperatureGrid, emissionGrid);
+    if (color.size() == 3) medium->setColorGrids(color[0].grid, color[1].grid, color[2].grid);
     checkRepresentable(*medium, desc.path + ": " + field, desc.strategy);
     if (medium->majorantGrid().empty() && warnings)
       warnings->push_back(path + ": " + field + ": grid \"" + density + "\" has no active voxels; the volume is empty");

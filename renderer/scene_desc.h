@@ -128,6 +128,7 @@ struct VolumeDesc {
   std::string density_grid = "density";
   std::string temperature_grid;  // needed by blackbody emission
   std::string emission_grid;     // needed by grid emission
+  std::string color_grid;        // optional vec3 grid (Cd) colouring grid emission per voxel
   bool has_generator = false;
   GeneratorDesc generator;
   TransformDesc transform;
@@ -143,6 +144,8 @@ struct VolumeDesc {
     v.field("density_grid", density_grid, "Name of the float density grid");
     v.field("temperature_grid", temperature_grid, "Name of the float temperature grid (blackbody emission)");
     v.field("emission_grid", emission_grid, "Name of the float emission grid (grid emission)");
+    v.field("color_grid", color_grid,
+            "Name of a vec3 grid (Cd) that colours grid emission per voxel: E = emission grid x Cd x color x intensity (empty: none)");
     if (V::kWriting ? has_generator : v.has("generator")) {
       has_generator = true;
       v.object("generator", generator, "Built-in procedural volume instead of a file");

@@ -24,6 +24,11 @@ const std::vector<std::string>& flameGridNames() {
   return v;
 }
 
+const std::vector<std::string>& colorGridNames() {
+  static const std::vector<std::string> v{"Cd", "color", "colour", "emission_color", "emission_colour", "Color"};
+  return v;
+}
+
 bool isVdbPath(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -159,6 +164,15 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
     volume.emission.intensity = 8.0f / (flame->maxValue * luminance(Rgb(1.0f, 0.45f, 0.12f)) * across);
     report.emissionGrid = flame->name;
     report.emissionMode = "grid (per unit length)";
+    // A colour grid (Cd) colours the flame per voxel instead of the fire colour.
+    for (const auto& n : colorGridNames())
+      if (const VdbGridInfo* cd = info.find(n); cd && cd->type == "vec3s") {
+        volume.color_grid = cd->name;
+        volume.emission.color = Vec3(1.0f);
+        volume.emission.intensity = 8.0f / (flame->maxValue * across);
+        report.emissionMode += ", coloured by \"" + cd->name + "\"";
+        break;
+      }
   } else if (temperature && temperature->maxValue > 0.0f) {
     // Kelvin when the values look like Kelvin, else a normalised simulation temperature whose peak
     // maps to 2000 K (500 K, where a blackbody turns black, at zero).
@@ -179,7 +193,7 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
     report.emissionMode = "blackbody (per unit length)";
   }
   for (const auto& g : info.grids)
-    if (g.name != volume.density_grid && g.name != report.emissionGrid) report.ignoredGrids.push_back(g.name + (g.isFloat ? "" : " (" + g.type + ")"));
+    if (g.name != volume.density_grid && g.name != report.emissionGrid && g.name != volume.color_grid) report.ignoredGrids.push_back(g.name + (g.isFloat ? "" : " (" + g.type + ")"));
 
   // Up axis: Z-up data is turned to Candela's Y-up by -90 degrees about X ((x, y, z) -> (x, z, -y)).
   std::string why;

@@ -168,6 +168,57 @@ class VdbStructureCheck {
 
 }  // namespace
 
+namespace {
+
+// The checks every float grid passes before it is used (what the renderer can represent:
+// input_limits.h), NaN / Inf / negative values set to 0, and the NanoVDB conversion.
+LoadedGrid convertFloatGrid(const openvdb::FloatGrid::Ptr& floatGrid, const std::string& path, const std::string& field,
+                            const std::string& name) {
+  if (!floatGrid->transform().isLinear())
+    throw InputError(path + ": " + field + ": grid \"" + name + "\" has a non-linear (frustum) transform, expected a linear one");
+  // What the renderer can represent (input_limits.h), checked before any dense or NanoVDB copy.
+  const auto fail = [&](const std::string& what) { throw InputError(path + ": " + field + ": grid \"" + name + "\" " + what); };
+  const openvdb::math::Mat4d map = floatGrid->transform().baseMap()->getAffineMap()->getMat4();
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (!std::isfinite(map(i, j)) || std::abs(map(i, j)) > 1e12) fail("has a non-finite or absurd index-to-world transform");
+  const double det = std::abs(map.getMat3().det());
+  if (!(det > 0.0)) fail("has a degenerate (flat) index-to-world transform");
+  const double voxelSize = std::cbrt(det);
+  if (voxelSize < limits::kMinVoxelSize || voxelSize > limits::kMaxVoxelSize)
+    fail("has voxels " + std::to_string(voxelSize) + " world units wide; expected between 1e-6 and 1e6");
+  if (floatGrid->background() != 0.0f)
+    fail("has background value " + std::to_string(floatGrid->background()) + "; expected 0 (the value outside the active voxels)");
+  const openvdb::CoordBBox box = floatGrid->evalActiveVoxelBoundingBox();
+  if (!box.empty()) {
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(box.min()[a]) > limits::kMaxIndexCoordinate || std::abs(box.max()[a]) > limits::kMaxIndexCoordinate)
+        fail("has active voxels at index " + std::to_string(std::max(std::abs(box.min()[a]), std::abs(box.max()[a]))) +
+             "; expected indices within 2^28");
+    const openvdb::Coord dim = box.dim();
+    const double boxVoxels = static_cast<double>(dim.x()) * dim.y() * dim.z();
+    if (boxVoxels > limits::kMaxBoxVoxels)
+      fail("has active voxels spanning " + std::to_string(dim.x()) + " x " + std::to_string(dim.y()) + " x " + std::to_string(dim.z()) +
+           " voxels; expected a bounding box of at most 4e9 voxels (are there stray voxels far from the rest?)");
+  }
+  checkMemoryBudget(2.0 * static_cast<double>(floatGrid->memUsage()), path + ": " + field, "grid \"" + name + "\"");
+  LoadedGrid loaded;
+  // NaN, Inf and negative values would poison majorants and the film: replace them with 0.
+  for (auto it = floatGrid->tree().beginValueAll(); it; ++it) {
+    const float v = *it;
+    if (!std::isfinite(v) || v < 0.0f) {
+      it.setValue(0.0f);
+      ++loaded.sanitizedVoxels;
+    }
+  }
+  const Mat4 worldFromIndex = toGlm(floatGrid->transform().baseMap()->getAffineMap()->getMat4());
+  auto handle = nanovdb::openToNanoVDB(*floatGrid);
+  loaded.grid = VoxelGrid(std::move(handle), worldFromIndex, name);
+  return loaded;
+}
+
+}  // namespace
+
 std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<std::string>& gridNames,
                                      const std::string& field) {
   initOpenVdb();
@@ -213,52 +264,12 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
       file.close();
       throw InputError(path + ": " + field + ": grid \"" + name + "\" is of type " + base->valueType() + ", expected float");
     }
-    if (!floatGrid->transform().isLinear()) {
+    try {
+      out.push_back(convertFloatGrid(floatGrid, path, field, name));
+    } catch (const InputError&) {
       file.close();
-      throw InputError(path + ": " + field + ": grid \"" + name + "\" has a non-linear (frustum) transform, expected a linear one");
+      throw;
     }
-    // What the renderer can represent (input_limits.h), checked before any dense or NanoVDB copy.
-    const auto fail = [&](const std::string& what) {
-      file.close();
-      throw InputError(path + ": " + field + ": grid \"" + name + "\" " + what);
-    };
-    const openvdb::math::Mat4d map = floatGrid->transform().baseMap()->getAffineMap()->getMat4();
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j)
-        if (!std::isfinite(map(i, j)) || std::abs(map(i, j)) > 1e12) fail("has a non-finite or absurd index-to-world transform");
-    const double det = std::abs(map.getMat3().det());
-    if (!(det > 0.0)) fail("has a degenerate (flat) index-to-world transform");
-    const double voxelSize = std::cbrt(det);
-    if (voxelSize < limits::kMinVoxelSize || voxelSize > limits::kMaxVoxelSize)
-      fail("has voxels " + std::to_string(voxelSize) + " world units wide; expected between 1e-6 and 1e6");
-    if (floatGrid->background() != 0.0f)
-      fail("has background value " + std::to_string(floatGrid->background()) + "; expected 0 (the value outside the active voxels)");
-    const openvdb::CoordBBox box = floatGrid->evalActiveVoxelBoundingBox();
-    if (!box.empty()) {
-      for (int a = 0; a < 3; ++a)
-        if (std::abs(box.min()[a]) > limits::kMaxIndexCoordinate || std::abs(box.max()[a]) > limits::kMaxIndexCoordinate)
-          fail("has active voxels at index " + std::to_string(std::max(std::abs(box.min()[a]), std::abs(box.max()[a]))) +
-               "; expected indices within 2^28");
-      const openvdb::Coord dim = box.dim();
-      const double boxVoxels = static_cast<double>(dim.x()) * dim.y() * dim.z();
-      if (boxVoxels > limits::kMaxBoxVoxels)
-        fail("has active voxels spanning " + std::to_string(dim.x()) + " x " + std::to_string(dim.y()) + " x " + std::to_string(dim.z()) +
-             " voxels; expected a bounding box of at most 4e9 voxels (are there stray voxels far from the rest?)");
-    }
-    checkMemoryBudget(2.0 * static_cast<double>(floatGrid->memUsage()), path + ": " + field, "grid \"" + name + "\"");
-    LoadedGrid loaded;
-    // NaN, Inf and negative values would poison majorants and the film: replace them with 0.
-    for (auto it = floatGrid->tree().beginValueAll(); it; ++it) {
-      const float v = *it;
-      if (!std::isfinite(v) || v < 0.0f) {
-        it.setValue(0.0f);
-        ++loaded.sanitizedVoxels;
-      }
-    }
-    const Mat4 worldFromIndex = toGlm(floatGrid->transform().baseMap()->getAffineMap()->getMat4());
-    auto handle = nanovdb::openToNanoVDB(*floatGrid);
-    loaded.grid = VoxelGrid(std::move(handle), worldFromIndex, name);
-    out.push_back(std::move(loaded));
   }
   file.close();
   return out;
@@ -292,6 +303,38 @@ void collectMetadata(const openvdb::MetaMap& meta, std::vector<std::string>& out
 }
 
 }  // namespace
+
+std::vector<LoadedGrid> loadVdbVectorGrid(const std::string& path, const std::string& name, const std::string& field) {
+  initOpenVdb();
+  VdbStructureCheck structure(path);
+  openvdb::io::File file(path);
+  openChecked(file, path, field, structure);
+  try {
+    if (!file.hasGrid(name)) throw InputError(path + ": " + field + ": expected a vector grid named \"" + name + "\"");
+    if (const auto t = structure.types.find(name); t != structure.types.end() && t->second != "Tree_vec3s_5_4_3")
+      throw InputError(path + ": " + field + ": grid \"" + name + "\" is of type " + t->second + ", expected vec3s (Tree_vec3s_5_4_3)");
+    auto vec = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid(name));
+    if (!vec) throw InputError(path + ": " + field + ": grid \"" + name + "\" is not a vec3s grid");
+    checkMemoryBudget(4.0 * static_cast<double>(vec->memUsage()), path + ": " + field, "grid \"" + name + "\"");
+    // One float grid per component, with the vector grid's transform and active voxels.
+    std::vector<LoadedGrid> out;
+    for (int c = 0; c < 3; ++c) {
+      auto component = openvdb::FloatGrid::create(0.0f);
+      component->setTransform(vec->transform().copy());
+      auto acc = component->getAccessor();
+      for (auto it = vec->cbeginValueOn(); it; ++it) acc.setValue(it.getCoord(), (*it)[c]);
+      out.push_back(convertFloatGrid(component, path, field, name + ".xyz"[0] + std::string(1, "xyz"[c])));
+    }
+    file.close();
+    return out;
+  } catch (const InputError&) {
+    file.close();
+    throw;
+  } catch (const std::exception& e) {
+    file.close();
+    throw InputError(path + ": " + field + ": cannot read grid \"" + name + "\" (" + e.what() + "); is the file truncated?");
+  }
+}
 
 VdbFileInfo describeVdbFile(const std::string& path, const std::vector<std::string>& measure) {
   initOpenVdb();

@@ -20,6 +20,9 @@ struct LoadedGrid {
 std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<std::string>& gridNames,
                                      const std::string& field);
 
+// Loads the named vec3s grid (a colour: Cd) as three float grids, x, y and z, with the same checks.
+std::vector<LoadedGrid> loadVdbVectorGrid(const std::string& path, const std::string& name, const std::string& field);
+
 }  // namespace candela
 
 namespace candela {

@@ -93,6 +93,52 @@ TEST(OpenVdb, RecognisesBlenderGridsAndTurnsZUpToYUp) {
   EXPECT_TRUE(sceneFromVdb(plain, forced).lights.empty());
 }
 
+TEST(OpenVdb, ACdGridColoursTheFlamePerVoxel) {
+  // Density and flame over a slab; Cd red on the left half (x < 0), blue on the right.
+  openvdb::initialize();
+  auto density = openvdb::FloatGrid::create(0.0f), flame = openvdb::FloatGrid::create(0.0f);
+  auto cd = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+  density->setName("density"), flame->setName("flame"), cd->setName("Cd");
+  auto transform = openvdb::math::Transform::createLinearTransform(0.05);
+  for (auto g : {openvdb::GridBase::Ptr(density), openvdb::GridBase::Ptr(flame), openvdb::GridBase::Ptr(cd)}) g->setTransform(transform);
+  for (int z = -4; z < 4; ++z)
+    for (int y = -10; y < 10; ++y)
+      for (int x = -20; x < 20; ++x) {
+        const openvdb::Coord c(x, y, z);
+        density->tree().setValue(c, 0.5f);
+        flame->tree().setValue(c, 1.0f);
+        cd->tree().setValue(c, x < 0 ? openvdb::Vec3s(1.0f, 0.0f, 0.0f) : openvdb::Vec3s(0.0f, 0.0f, 1.0f));
+      }
+  const fs::path dir = test::scratchDirectory("cd");
+  openvdb::io::File file((dir / "coloured.vdb").string());
+  file.write({density, flame, cd});
+  file.close();
+  VdbImportReport report;
+  SceneDesc scene = sceneFromVdb((dir / "coloured.vdb").string(), {}, &report);
+  ASSERT_EQ(scene.volumes[0].color_grid, "Cd") << report.summary();
+  EXPECT_NE(report.summary().find("coloured by \"Cd\""), std::string::npos) << report.summary();
+  scene.lights.clear();  // emission only
+  scene.camera.resolution = {32, 16};
+  scene.camera.position = Vec3(0.0f, 0.0f, 3.0f);
+  scene.camera.look_at = Vec3(0.0f);
+  scene.camera.fov_y = 30.0f;
+  const Film film = test::render(scene, 16, 2);
+  Rgb left(0.0f), right(0.0f);
+  for (int y = 4; y < 12; ++y)
+    for (int x = 4; x < 28; ++x) (x < 16 ? left : right) += film.mean(x, y);
+  EXPECT_GT(left.r, 10.0f * left.b) << "left " << left.r << " " << left.b;
+  EXPECT_GT(right.b, 10.0f * right.r) << "right " << right.r << " " << right.b;
+  // A colour grid that is not a vector grid is refused with the file, the field and the type.
+  scene.volumes[0].color_grid = "flame";
+  try {
+    Scene::build(scene);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("color_grid"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("expected vec3s"), std::string::npos) << e.what();
+  }
+}
+
 TEST(OpenVdb, EachGeneratorWrittenToVdbOpensAndRenders) {
   const fs::path dir = test::scratchDirectory("generators");
   for (const char* type : {"constant", "ramp", "torch", "mist", "cloud", "plume"}) {
