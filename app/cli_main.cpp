@@ -155,8 +155,9 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
 // counted work, over the report scenes and strategies, by least squares (non-negative).
 int calibrate() {
   const std::string assets = std::string(CANDELA_SOURCE_DIR) + "/assets/scenes/";
+  constexpr int kTerms = 7;  // WorkCounters' fields, in cost()'s order
   struct Row {
-    double x[7];
+    double x[kTerms];
     double seconds;
   };
   std::vector<Row> rows;
@@ -178,12 +179,12 @@ int calibrate() {
         renderer.renderPass(film, 8);
         seconds = std::min(seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       }
-      WorkCounters w = renderer.work();
-      w.samples -= before.samples, w.collisions -= before.collisions, w.segments -= before.segments, w.rays -= before.rays,
-          w.knots -= before.knots, w.guided -= before.guided, w.guides -= before.guides;
+      WorkCounters w = renderer.work() - before;
       // Three passes counted, the fastest timed: one pass's work.
-      w.samples /= 3, w.collisions /= 3, w.segments /= 3, w.rays /= 3, w.knots /= 3, w.guided /= 3, w.guides /= 3;
-      rows.push_back({{double(w.samples), double(w.collisions), double(w.segments), double(w.rays), double(w.knots), double(w.guided), double(w.guides)}, seconds});
+      Row row{{double(w.samples), double(w.collisions), double(w.segments), double(w.rays), double(w.knots), double(w.guided), double(w.guides)},
+              seconds};
+      for (double& x : row.x) x /= 3.0;
+      rows.push_back(row);
       std::printf("%-18s %-13s %.3f s: samples %llu collisions %llu segments %llu rays %llu knots %llu guided %llu guides %llu\n", name, preset,
                   seconds, (unsigned long long)w.samples, (unsigned long long)w.collisions, (unsigned long long)w.segments,
                   (unsigned long long)w.rays, (unsigned long long)w.knots, (unsigned long long)w.guided, (unsigned long long)w.guides);
@@ -191,34 +192,35 @@ int calibrate() {
   }
   // Relative least squares (each row weighted by 1 / its time), with terms whose coefficient comes
   // out negative dropped and the fit redone.
-  bool active[7] = {true, true, true, true, true, true, true};
-  double c[7] = {};
+  bool active[kTerms];
+  std::fill(active, active + kTerms, true);
+  double c[kTerms] = {};
   for (int round = 0; round < 5; ++round) {
-    double a[7][8] = {};
+    double a[kTerms][kTerms + 1] = {};
     for (const Row& r : rows)
-      for (int i = 0; i < 7; ++i)
-        for (int j = 0; j < 7; ++j) {
+      for (int i = 0; i < kTerms; ++i)
+        for (int j = 0; j < kTerms; ++j) {
           if (!active[i] || !active[j]) continue;
           const double wgt = 1.0 / (r.seconds * r.seconds);
           a[i][j] += r.x[i] * r.x[j] * wgt;
-          if (j == 0) a[i][7] += r.x[i] * r.seconds * wgt;
+          if (j == 0) a[i][kTerms] += r.x[i] * r.seconds * wgt;
         }
-    for (int i = 0; i < 7; ++i)
-      if (!active[i]) a[i][i] = 1.0, a[i][7] = 0.0;
-    for (int i = 0; i < 7; ++i) {  // Gauss-Jordan
+    for (int i = 0; i < kTerms; ++i)
+      if (!active[i]) a[i][i] = 1.0, a[i][kTerms] = 0.0;
+    for (int i = 0; i < kTerms; ++i) {  // Gauss-Jordan
       int pivot = i;
-      for (int k = i + 1; k < 7; ++k)
+      for (int k = i + 1; k < kTerms; ++k)
         if (std::abs(a[k][i]) > std::abs(a[pivot][i])) pivot = k;
-      for (int j = 0; j < 8; ++j) std::swap(a[i][j], a[pivot][j]);
-      for (int k = 0; k < 7; ++k) {
+      for (int j = 0; j <= kTerms; ++j) std::swap(a[i][j], a[pivot][j]);
+      for (int k = 0; k < kTerms; ++k) {
         if (k == i || a[i][i] == 0.0) continue;
         const double f = a[k][i] / a[i][i];
-        for (int j = 0; j < 8; ++j) a[k][j] -= f * a[i][j];
+        for (int j = 0; j <= kTerms; ++j) a[k][j] -= f * a[i][j];
       }
     }
     bool dropped = false;
-    for (int i = 0; i < 7; ++i) {
-      c[i] = a[i][i] != 0.0 ? a[i][7] / a[i][i] : 0.0;
+    for (int i = 0; i < kTerms; ++i) {
+      c[i] = a[i][i] != 0.0 ? a[i][kTerms] / a[i][i] : 0.0;
       if (active[i] && c[i] < 0.0) active[i] = false, dropped = true;
     }
     if (!dropped) break;
@@ -226,7 +228,7 @@ int calibrate() {
   double worst = 0.0;
   for (const Row& r : rows) {
     double predicted = 0.0;
-    for (int i = 0; i < 7; ++i) predicted += c[i] * r.x[i];
+    for (int i = 0; i < kTerms; ++i) predicted += c[i] * r.x[i];
     worst = std::max(worst, std::abs(predicted / r.seconds - 1.0));
   }
   std::printf("ns per operation: samples %.1f, collisions %.1f, segments %.1f, rays %.1f, knots %.1f, guided %.1f, guides %.1f (worst relative error %.0f%%)\n",

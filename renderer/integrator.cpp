@@ -274,17 +274,13 @@ enum class Decision { Continue, Absorb, Scatter };
 // with the per-channel mu_a handled by the weight mu_a,rgb / mu_a,avg. A null collision's weight
 // mu_n / (P_n mu_bar) is exactly 1. Per-unit-length emission (no mu_a to absorb it) is gathered at
 // every collision, E / mu_bar.
-Decision analogEvent(const Collision& c, const CollisionCoefficients& k, float u, bool emissive, float emissionWeight, Rgb& beta,
-                     Rgb& L, float& nullProbability, float& scatterDensity, float& pick) {
+Decision analogEvent(const Collision& c, const CollisionCoefficients& k, float u, bool emissive, bool perLength, float emissionWeight,
+                     Rgb& beta, Rgb& L, float& nullProbability, float& scatterDensity, float& pick) {
   const float x = u * c.muBar;
-  Rgb atAbsorption(0.0f), atCollision(0.0f);
-  if (emissive) {
-    c.emissionSourceByUnits(atAbsorption, atCollision);
-    // Emission per unit length may sit where nothing absorbs: gathered at every collision instead.
-    L += beta * atCollision * (emissionWeight / c.muBar);
-  }
+  // Emission per unit length may sit where nothing absorbs: gathered at every collision instead.
+  if (perLength) L += beta * c.emissionSourceOf(true) * (emissionWeight / c.muBar);
   if (x < k.sigmaA) {
-    if (emissive) L += beta * atAbsorption * (emissionWeight / k.sigmaA);
+    if (emissive) L += beta * c.emissionSourceOf(false) * (emissionWeight / k.sigmaA);
     return Decision::Absorb;
   }
   pick = x - k.sigmaA;
@@ -341,6 +337,7 @@ int scatteringMedium(const Collision& c, float pick) {
 PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const {
   const bool gather = scene_.strategy().emission.gather_every_collision;
   const bool emissive = scene_.hasEmissiveMedia();
+  const bool perLength = scene_.hasPerLengthEmission();
   SegmentWalk walk;
   trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
     const CollisionCoefficients k(c);
@@ -348,7 +345,8 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
     float pick = 0.0f;
     const Decision d = gather ? gatherEvent(c, k, u, emissive, emissionWeight, guided, st.beta, L, walk.walkWeight, walk.nullProbability,
                                             walk.scatterDensity, pick, rng)
-                              : analogEvent(c, k, u, emissive, emissionWeight, st.beta, L, walk.nullProbability, walk.scatterDensity, pick);
+                              : analogEvent(c, k, u, emissive, perLength, emissionWeight, st.beta, L, walk.nullProbability, walk.scatterDensity,
+                                            pick);
     if (d == Decision::Continue) return true;
     if (d == Decision::Absorb) {
       walk.event = SegmentWalk::Event::Absorbed;

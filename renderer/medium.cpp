@@ -116,10 +116,9 @@ void Medium::setColorGrids(VoxelGrid r, VoxelGrid g, VoxelGrid b) {
 Medium::Sampler::Sampler(const Medium& m)
     : medium_(&m),
       density_(m.density_.sampler()),
-      aux_(m.aux_.valid() ? m.aux_.sampler() : m.density_.sampler()),
-      colorR_(m.colorR_.valid() ? m.colorR_.sampler() : m.density_.sampler()),
-      colorG_(m.colorG_.valid() ? m.colorG_.sampler() : m.density_.sampler()),
-      colorB_(m.colorB_.valid() ? m.colorB_.sampler() : m.density_.sampler()) {}
+      aux_(m.aux_.valid() ? m.aux_.sampler() : m.density_.sampler()) {
+  if (m.colorR_.valid()) color_ = ColorSamplers{m.colorR_.sampler(), m.colorG_.sampler(), m.colorB_.sampler()};
+}
 
 float Medium::Sampler::sourceLuminanceAtVoxel(int x, int y, int z) const {
   const Medium& m = *medium_;
@@ -140,11 +139,11 @@ Rgb Medium::Sampler::emission(const Vec3& indexPos) const {
     return blackbody()(value * e.temperature_scale + e.temperature_offset) * e.intensity;
   }
   Rgb color = e.color;
-  if (m.colorR_.valid()) {
+  if (color_) {
     // Cd at the point, clamped to [0, 1e6] per channel (a colour, not a light).
     const Vec3 q = Vec3(m.colorFromDensityIndex_ * glm::vec4(indexPos, 1.0f));
-    color *= Rgb(std::clamp(colorR_.trilinear(q), 0.0f, 1e6f), std::clamp(colorG_.trilinear(q), 0.0f, 1e6f),
-                 std::clamp(colorB_.trilinear(q), 0.0f, 1e6f));
+    color *= Rgb(std::clamp(color_->r.trilinear(q), 0.0f, 1e6f), std::clamp(color_->g.trilinear(q), 0.0f, 1e6f),
+                 std::clamp(color_->b.trilinear(q), 0.0f, 1e6f));
   }
   return color * (std::max(value, 0.0f) * e.intensity);
 }

@@ -10,6 +10,7 @@
 #include "voxel_grid.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace candela {
@@ -87,7 +88,10 @@ class Medium {
     const Medium* medium_;
     VoxelGrid::Sampler density_;
     VoxelGrid::Sampler aux_;
-    VoxelGrid::Sampler colorR_, colorG_, colorB_;
+    struct ColorSamplers {
+      VoxelGrid::Sampler r, g, b;
+    };
+    std::optional<ColorSamplers> color_;  // only with a colour grid: other media pay nothing per ray
   };
 
  private:

@@ -48,15 +48,9 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
           pass.addSample(x, y, tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng));
         }
       }
-    const WorkCounters& after = threadWork();
     WorkCounters& mine = passWork.local();
+    mine += threadWork() - before;
     mine.samples += static_cast<uint64_t>(x1 - x0) * static_cast<uint64_t>(y1 - y0) * static_cast<uint64_t>(spp);
-    mine.collisions += after.collisions - before.collisions;
-    mine.segments += after.segments - before.segments;
-    mine.rays += after.rays - before.rays;
-    mine.knots += after.knots - before.knots;
-    mine.guided += after.guided - before.guided;
-    mine.guides += after.guides - before.guides;
   };
   const int tiles = tilesX * tilesY;
   auto run = [&] {

@@ -54,13 +54,10 @@ std::vector<LoadedGrid> loadGridsCached(const std::string& path, const std::vect
 }  // namespace
 
 void prefetchSceneGrids(const SceneDesc& desc) {
-  namespace fs = std::filesystem;
-  const fs::path base = desc.path.empty() ? fs::path(".") : fs::path(desc.path).parent_path();
   for (size_t i = 0; i < desc.volumes.size(); ++i) {
     const VolumeDesc& v = desc.volumes[i];
     if (v.has_generator) continue;
-    std::string path = fs::path(v.file).is_absolute() ? v.file : (base / v.file).lexically_normal().string();
-    path = substituteFrame(path, desc.render.frame);
+    const std::string path = volumeFilePath(desc, v, desc.render.frame);
     std::vector<std::string> names{v.density_grid};
     if (v.emission.mode == EmissionMode::Blackbody) names.push_back(v.temperature_grid);
     if (v.emission.mode == EmissionMode::Grid) names.push_back(v.emission_grid);
@@ -128,8 +125,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       if (v.emission.mode == EmissionMode::Grid)
         throw InputError(desc.path + ": " + field + ".emission.mode: generators make no emission grid; expected \"none\" or \"blackbody\"");
     } else {
-      path = fs::path(v.file).is_absolute() ? v.file : (base / v.file).lexically_normal().string();
-      path = substituteFrame(path, desc.render.frame);  // fire.####.vdb: this scene's frame
+      path = volumeFilePath(desc, v, desc.render.frame);  // fire.####.vdb: this scene's frame
     }
     std::vector<std::string> names{density};
     if (v.emission.mode == EmissionMode::Blackbody) names.push_back(temperature);
@@ -176,6 +172,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     medium->setIndex(static_cast<int>(i));
     medium->applyStrategy(desc.strategy);
     scene->hasEmissiveMedia_ |= medium->emissive();
+    scene->hasPerLengthEmission_ |= medium->emitsPerLength();
     scene->media_.push_back(std::move(medium));
   }
   for (const auto& m : scene->media_) scene->mediaView_.media.push_back(m.get());
@@ -273,7 +270,7 @@ void Scene::setStrategy(const StrategySettings& strategy) {
 void Scene::applyStrategy(const StrategySettings& strategy) {
   // The preset "auto" as chosen decides again, unless it is what this scene already decided.
   const bool sameAsDecided = autoDecision_ && toJson(strategy) == toJson(desc_.strategy);
-  if (strategy.preset == "auto" && toJson(strategy) == toJson(autoBaseStrategy()) && !sameAsDecided) {
+  if (needsAutoResolve(strategy) && !sameAsDecided) {
     autoDecision_ = resolveAutoStrategy(*this);
     return;
   }

@@ -61,6 +61,8 @@ class Scene {
   const StrategySettings& strategy() const { return desc_.strategy; }
   const RenderSettings& render() const { return desc_.render; }
   bool hasEmissiveMedia() const { return hasEmissiveMedia_; }
+  // Some medium emits per unit length (EmissionUnits::PerLength).
+  bool hasPerLengthEmission() const { return hasPerLengthEmission_; }
   float radius() const { return radius_; }
   Vec3 center() const { return center_; }
 
@@ -111,6 +113,7 @@ class Scene {
   void buildLightSampler();
   std::unique_ptr<Surfaces> surfaces_;
   bool hasEmissiveMedia_ = false;
+  bool hasPerLengthEmission_ = false;
   std::optional<AutoDecision> autoDecision_;
   std::shared_ptr<const ProbeSet> probes_;
   std::thread probeThread_;

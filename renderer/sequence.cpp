@@ -57,6 +57,16 @@ std::string padded(int frame, int width) {
 
 }  // namespace
 
+std::string volumeFilePath(const SceneDesc& scene, const VolumeDesc& volume) {
+  if (fs::path(volume.file).is_absolute()) return volume.file;
+  const fs::path base = scene.path.empty() ? fs::path(".") : fs::path(scene.path).parent_path();
+  return (base / volume.file).lexically_normal().string();
+}
+
+std::string volumeFilePath(const SceneDesc& scene, const VolumeDesc& volume, int frame) {
+  return substituteFrame(volumeFilePath(scene, volume), frame);
+}
+
 bool hasFramePattern(const std::string& file) { return findPattern(fs::path(file).filename().string()).pos != std::string::npos; }
 
 std::string substituteFrame(const std::string& file, int frame) {
@@ -104,11 +114,9 @@ FrameRange findFrames(const std::string& patternPath) {
 FrameRange sceneFrames(const SceneDesc& scene) {
   FrameRange all;
   bool any = false;
-  const fs::path base = scene.path.empty() ? fs::path(".") : fs::path(scene.path).parent_path();
   for (const auto& v : scene.volumes) {
     if (v.has_generator || !hasFramePattern(v.file)) continue;
-    const std::string path = fs::path(v.file).is_absolute() ? v.file : (base / v.file).lexically_normal().string();
-    const FrameRange r = findFrames(path);
+    const FrameRange r = findFrames(volumeFilePath(scene, v));
     if (!any) {
       all = r;
       any = true;

@@ -14,6 +14,11 @@
 
 namespace candela {
 
+// A volume file resolved against its scene's directory (absolute paths stay): with its frame
+// pattern as written, or with `frame` substituted.
+std::string volumeFilePath(const SceneDesc& scene, const VolumeDesc& volume);
+std::string volumeFilePath(const SceneDesc& scene, const VolumeDesc& volume, int frame);
+
 // True when `file` holds a frame pattern.
 bool hasFramePattern(const std::string& file);
 // The file of frame `frame`: the pattern replaced by the zero-padded number (negative frames keep

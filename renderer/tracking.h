@@ -59,15 +59,15 @@ struct Collision {
       if (track[i]->medium->emissive()) s += track[i]->sampler.source(indexPos(i), sigmaT[i]);
     return s;
   }
-  // The source split by how an analog walk can gather it: radiance-unit media at absorption
-  // (their source vanishes where mu_a does), per_length media at every collision.
-  void emissionSourceByUnits(Rgb& atAbsorption, Rgb& atCollision) const {
-    atAbsorption = atCollision = Rgb(0.0f);
+  // The source of the media that emit per unit length (perLength) or in radiance units (not): an
+  // analog walk gathers the first at every collision, the second at absorption only.
+  Rgb emissionSourceOf(bool perLength) const {
+    Rgb s(0.0f);
     for (int i = 0; i < count; ++i) {
       const Medium& m = *track[i]->medium;
-      if (!m.emissive()) continue;
-      (m.emitsPerLength() ? atCollision : atAbsorption) += track[i]->sampler.source(indexPos(i), sigmaT[i]);
+      if (m.emissive() && m.emitsPerLength() == perLength) s += track[i]->sampler.source(indexPos(i), sigmaT[i]);
     }
+    return s;
   }
 };
 

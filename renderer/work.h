@@ -21,6 +21,13 @@ struct WorkCounters {
     samples += o.samples, collisions += o.collisions, segments += o.segments, rays += o.rays, knots += o.knots, guided += o.guided, guides += o.guides;
     return *this;
   }
+  // The work done between two readings of the same counters.
+  WorkCounters operator-(const WorkCounters& o) const {
+    WorkCounters d = *this;
+    d.samples -= o.samples, d.collisions -= o.collisions, d.segments -= o.segments, d.rays -= o.rays, d.knots -= o.knots,
+        d.guided -= o.guided, d.guides -= o.guides;
+    return d;
+  }
   // The cost in nanoseconds of one core of the calibration machine: constants fitted once by least
   // squares against render time (candela-cli calibrate, README "The auto strategy"); never the clock.
   double cost() const;

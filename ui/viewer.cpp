@@ -109,11 +109,7 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
   }
 }
 
-bool rendersDifferently(const SceneDesc& a, const SceneDesc& b) {
-  Json ja = sceneToJson(a), jb = sceneToJson(b);
-  for (const char* key : {"display", "description"}) ja.erase(key), jb.erase(key);
-  return ja != jb || a.path != b.path;
-}
+bool rendersDifferently(const SceneDesc& a, const SceneDesc& b) { return diffScenes(a, b).any(); }
 
 nlohmann::json Viewer::lookState() const {
   SceneDesc withDisplay = edited_;

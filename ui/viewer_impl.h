@@ -25,6 +25,7 @@
 #include <imgui.h>
 
 #include <chrono>
+#include <climits>
 #include <deque>
 #include <filesystem>
 #include <functional>
@@ -130,6 +131,7 @@ class Viewer {
   void captureFigure();
   void captureCanvas();
   DisplayImage readCanvas() const;
+  void addComparisonMetadata(std::map<std::string, std::string>& meta) const;
   std::optional<std::string> canvasCaptureRequest_;
 
   float imageAspect() const;
@@ -213,6 +215,7 @@ class Viewer {
   bool frameLatencyPending_ = false;
   double lastFrameStepMs_ = 0.0;
   std::unique_ptr<FramePrefetcher> prefetcher_;
+  int prefetchedFrame_ = INT_MIN;
 
   Keys keys_;
   int dragButton_ = -1;

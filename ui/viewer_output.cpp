@@ -20,6 +20,15 @@ bool Viewer::writeFigure(const std::string& path) {
   return true;
 }
 
+// Which snapshot the live render is compared with, and how (nothing when none is).
+void Viewer::addComparisonMetadata(std::map<std::string, std::string>& meta) const {
+  const Snapshot* snap = comparedSnapshot_ ? snapshots_.find(comparedSnapshot_) : nullptr;
+  if (!snap) return;
+  meta["compared_snapshot"] = snap->label;
+  meta["compare_mode"] = canvas_.wipe() ? "wipe" : "side by side";
+  meta["wipe_position"] = std::to_string(canvas_.wipePosition());
+}
+
 // The image area of the frame just drawn (before the swap), as the window shows it.
 DisplayImage Viewer::readCanvas() const {
   const auto [x, y, w, h] = canvas_.framebufferRect(canvas_.rect());
@@ -103,11 +112,7 @@ bool Viewer::screenshot(const std::string& requestedPath) {
     meta["redo_steps"] = std::to_string(history_.redoSteps());
     meta["frame"] = std::to_string(edited_.render.frame);
     if (!frames_.empty()) meta["frames"] = std::to_string(frames_.first) + "-" + std::to_string(frames_.last);
-    if (const Snapshot* snap = comparedSnapshot_ ? snapshots_.find(comparedSnapshot_) : nullptr) {
-      meta["compared_snapshot"] = snap->label;
-      meta["compare_mode"] = canvas_.wipe() ? "wipe" : "side by side";
-      meta["wipe_position"] = std::to_string(canvas_.wipePosition());
-    }
+    addComparisonMetadata(meta);
     if (!importSummary_.empty()) meta["opened_volume"] = importSummary_;
     if (!frame_->autoDecision.empty()) meta["auto_decision"] = frame_->autoDecision;
     if (frame_->scene) {
@@ -146,11 +151,7 @@ void Viewer::captureCanvas() {
   canvasCaptureRequest_.reset();
   try {
     DisplayImage image = readCanvas();
-    if (const Snapshot* snap = snapshots_.find(comparedSnapshot_)) {
-      image.metadata["compared_snapshot"] = snap->label;
-      image.metadata["compare_mode"] = canvas_.wipe() ? "wipe" : "side by side";
-      image.metadata["wipe_position"] = std::to_string(canvas_.wipePosition());
-    }
+    addComparisonMetadata(image.metadata);
     writeDisplayPng(path, image);
     report("canvas: wrote " + path);
   } catch (const std::exception& e) {

@@ -484,9 +484,8 @@ void Viewer::pollTimeline() {
   if (!prefetcher_) prefetcher_ = std::make_unique<FramePrefetcher>();
   SceneDesc next = edited_;
   next.render.frame = edited_.render.frame + 1 > frames_.last ? frames_.first : edited_.render.frame + 1;
-  static int prefetched = INT_MIN;
-  if (prefetched != next.render.frame && !prefetcher_->busy()) {
-    prefetched = next.render.frame;
+  if (prefetchedFrame_ != next.render.frame && !prefetcher_->busy()) {
+    prefetchedFrame_ = next.render.frame;
     prefetcher_->prefetch(next);
   }
   const bool frameDone = frame_->film.spp() >= playSpp_ || (playSeconds_ > 0.0f && frame_->seconds >= playSeconds_);

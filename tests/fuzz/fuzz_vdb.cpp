@@ -1,6 +1,6 @@
 // libFuzzer target: the VDB loader (loadVdbGrids) on arbitrary bytes, asking for a density and a
 // temperature grid as a blackbody volume does, and opening the bytes as a bare VDB does (the grid
-// list, its metadata and bounding boxes: sceneFromVdb). Any outcome but a result or an InputError is
+// list, its metadata and bounding boxes: sceneFromVdb) and reading a vec3 colour grid. Any outcome but a result or an InputError is
 // a finding.
 #include "vdb_import.h"
 #include "vdb_io.h"
@@ -28,6 +28,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   try {
     (void)candela::sceneFromVdb(path);
+  } catch (const candela::InputError&) {
+  }
+  try {
+    (void)candela::loadVdbVectorGrid(path, "Cd", "volumes.0.color_grid");
   } catch (const candela::InputError&) {
   }
   return 0;
