@@ -247,7 +247,6 @@ struct PathTracer::SegmentWalk {
   float scatterG = 0.0f, scatterT = 0.0f;
   float nullProbability = 1.0f;  // prod of P_null over the walk's null collisions (for MIS)
   float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering (for MIS)
-  float walkWeight = 1.0f;       // product of absorption weights since the last roulette (gather)
 };
 
 namespace {
@@ -292,13 +291,30 @@ Decision analogEvent(const Collision& c, const CollisionCoefficients& k, float u
   return Decision::Scatter;
 }
 
+// The gather walk's roulette (docs/method.md s.2): the weight lost to absorption since the last
+// roulette, and once it falls below 0.1 a survival probability of 10x that weight. It depends on
+// the collisions' coefficients alone, never on a random number, so a guided sample replays it
+// exactly over its own null collisions to evaluate the tracked technique's pdf (s.4).
+struct GatherRoulette {
+  float walkWeight = 1.0f;
+  // Folds in one null collision's kept share (mu_s + mu_n) / mu_bar; returns the survival
+  // probability asked for there (1: no roulette).
+  float survival(float keep) {
+    walkWeight *= keep;
+    if (!(walkWeight < 0.1f)) return 1.0f;
+    const float survive = walkWeight * 10.0f;
+    walkWeight = 1.0f;
+    return survive;
+  }
+};
+
 // Emission gathered at every collision (talk 2.1, docs/method.md s.2): P_a = 1, add mu_a Le / mu_bar;
 // absorption becomes the weight 1 - mu_a / mu_bar, and the walk scatters with
-// P_s = mu_s / (mu_s + mu_n), else continues. Off guided segments, the weight lost to absorption
-// along the walk is rouletted once it falls below 0.1 (unbiased, keeps walks short); guided
-// segments skip that roulette, whose survival probability would enter p_tracked.
+// P_s = mu_s / (mu_s + mu_n), else continues, rouletted as GatherRoulette says (unbiased, keeps
+// walks through a dense flame short). On guided segments the survival probabilities enter the
+// tracked technique's pdf through nullProbability, as every other continuation probability does.
 Decision gatherEvent(const Collision& c, const CollisionCoefficients& k, float u, bool emissive, float emissionWeight, bool guided,
-                     Rgb& beta, Rgb& L, float& walkWeight, float& nullProbability, float& scatterDensity, float& pick, Rng& rng) {
+                     Rgb& beta, Rgb& L, GatherRoulette& roulette, float& nullProbability, float& scatterDensity, float& pick, Rng& rng) {
   if (emissive) L += beta * c.emissionSource() * (emissionWeight / c.muBar);
   const float keep = (k.sigmaS + k.sigmaN) / c.muBar;
   if (!(keep > 0.0f)) return Decision::Absorb;
@@ -308,16 +324,11 @@ Decision gatherEvent(const Collision& c, const CollisionCoefficients& k, float u
     scatterDensity = c.muBar * k.sigmaS / (k.sigmaS + k.sigmaN);
     return Decision::Scatter;
   }
-  if (guided) {
-    nullProbability *= k.sigmaN / (k.sigmaS + k.sigmaN);
-    return Decision::Continue;
-  }
-  walkWeight *= keep;
-  if (walkWeight < 0.1f) {
-    const float survive = walkWeight * 10.0f;
+  const float survive = roulette.survival(keep);
+  if (guided) nullProbability *= k.sigmaN / (k.sigmaS + k.sigmaN) * survive;
+  if (survive < 1.0f) {
     if (rng.uniform() >= survive) return Decision::Absorb;
     beta /= survive;
-    walkWeight = 1.0f;
   }
   return Decision::Continue;
 }
@@ -339,11 +350,12 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
   const bool emissive = scene_.hasEmissiveMedia();
   const bool perLength = scene_.hasPerLengthEmission();
   SegmentWalk walk;
+  GatherRoulette roulette;
   trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
     const CollisionCoefficients k(c);
     const float u = rng.uniform();
     float pick = 0.0f;
-    const Decision d = gather ? gatherEvent(c, k, u, emissive, emissionWeight, guided, st.beta, L, walk.walkWeight, walk.nullProbability,
+    const Decision d = gather ? gatherEvent(c, k, u, emissive, emissionWeight, guided, st.beta, L, roulette, walk.nullProbability,
                                             walk.scatterDensity, pick, rng)
                               : analogEvent(c, k, u, emissive, perLength, emissionWeight, st.beta, L, walk.nullProbability, walk.scatterDensity,
                                             pick);
@@ -391,10 +403,16 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   // Null collisions on [0, t) by ratio tracking, with exact products (no roulette): `ratio` is the
   // estimator's transmittance, `nullProbability` what the tracked technique would have paid.
   float ratio = 1.0f, nullProbability = 1.0f;
+  GatherRoulette roulette;  // replayed, not drawn: the tracked walk's survival probabilities
   trackCollisions(s.media(), st.ray, t, rng, [&](const Collision& c) {
     const CollisionCoefficients k(c);
     ratio *= k.sigmaN / c.muBar;
-    nullProbability *= gather ? (k.sigmaS + k.sigmaN > 0.0f ? k.sigmaN / (k.sigmaS + k.sigmaN) : 0.0f) : k.sigmaN / c.muBar;
+    if (gather) {
+      const float kept = k.sigmaS + k.sigmaN;
+      nullProbability *= kept > 0.0f ? k.sigmaN / kept * roulette.survival(kept / c.muBar) : 0.0f;
+    } else {
+      nullProbability *= k.sigmaN / c.muBar;
+    }
     return ratio > 0.0f;
   });
   if (!(ratio > 0.0f)) return Rgb(0.0f);
