@@ -36,6 +36,13 @@ std::string AutoDecision::summary() const {
   return s;
 }
 
+double GuidedRegions::guidedShare() const {
+  if (probability.empty()) return 0.0;
+  size_t guided = 0;
+  for (float q : probability) guided += q > 0.0f;
+  return static_cast<double>(guided) / static_cast<double>(probability.size());
+}
+
 StrategySettings autoBaseStrategy() {
   StrategySettings s = strategyPreset("conventional");
   s.preset = "auto";
@@ -145,10 +152,19 @@ AutoDecision decide(Scene& scene) {
                       std::max(8, static_cast<int>(std::lround(full.resolution.second * scale)))};
   scene.setCamera(small);
   d.pilotWidth = small.resolution.first, d.pilotHeight = small.resolution.second, d.pilotSpp = 8;
-  for (const AutoCandidate& c : candidates) {
+  std::vector<std::vector<double>> regionVariance;  // per candidate, per 8 x 8-pixel region
+  int regionsX = 0, regionsY = 0;
+  // Renders one candidate's pilot image and measures it; `regions` (for "full, by region") are
+  // applied after its strategy; `seedOffset` gives an image independent of the others'.
+  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, uint32_t seedOffset) {
     const bool hadProbes = scene.probes() != nullptr;
     scene.setStrategy(c.strategy);
+    if (map) scene.setGuidedRegions(*map);
     if (!hadProbes && scene.probes()) d.probeSeconds += scene.probes()->learnSeconds();
+    const RenderSettings render = scene.render();
+    RenderSettings shifted = render;
+    shifted.seed += seedOffset;
+    scene.setRender(shifted);
     ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
@@ -165,6 +181,8 @@ AutoDecision decide(Scene& scene) {
     const double eps = (0.1 * imageMean) * (0.1 * imageMean) + 1e-30;
     double total = 0.0;
     int regions = 0;
+    std::vector<double>& regional = regionVariance.emplace_back();
+    regionsX = (w + 7) / 8, regionsY = (h + 7) / 8;
     for (int ry = 0; ry < h; ry += 8)
       for (int rx = 0; rx < w; rx += 8) {
         double var = 0.0, mean = 0.0;
@@ -178,7 +196,8 @@ AutoDecision decide(Scene& scene) {
               mean += m;
             }
         mean /= count;
-        total += (var / count) / (mean * mean + eps);
+        regional.push_back((var / count) / (mean * mean + eps));
+        total += regional.back();
         ++regions;
       }
     AutoMeasurement m;
@@ -189,6 +208,33 @@ AutoDecision decide(Scene& scene) {
     m.efficiency = 1.0 / std::max(1e-300, m.relativeVariance * m.workPerSample);
     d.pilotWork += work.cost();
     d.pilot.push_back(m);
+    scene.setRender(render);
+  };
+  for (const AutoCandidate& c : candidates) measure(c, nullptr, 0);
+  // "full, by region": per region, the guided vertex only where full's pilot variance x work beat
+  // the plain candidate's by kAutoMargin (regions differ: a fire beside god rays wants both). The
+  // map is then rendered and measured like any candidate, with another seed: measuring it on the
+  // images that chose it would credit it with their luck (the best of two noisy estimates per
+  // region).
+  size_t fullIndex = candidates.size();
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if (candidates[i].name == "full") fullIndex = i;
+  GuidedRegions regions;
+  if (fullIndex < candidates.size()) {
+    const AutoMeasurement& plain = d.pilot[0];
+    const AutoMeasurement& guided = d.pilot[fullIndex];
+    regions.regionsX = regionsX, regions.regionsY = regionsY;
+    for (size_t r = 0; r < regionVariance[0].size(); ++r) {
+      const double vp = regionVariance[0][r], vg = regionVariance[fullIndex][r];
+      const bool guide = vg * guided.workPerSample * kAutoMargin < vp * plain.workPerSample;
+      regions.probability.push_back(guide ? candidates[fullIndex].strategy.guiding.guided_probability : 0.0f);
+    }
+    const double share = regions.guidedShare();
+    // Only a genuine mix is a new candidate: all or nothing is "full" or the plain one.
+    if (share > 0.0 && share < 1.0) {
+      candidates.push_back({"full, by region", candidates[fullIndex].strategy});
+      measure(candidates.back(), &regions, 1);
+    }
   }
   // The most efficient candidate, but a more elaborate one only when it beats the first (the plain
   // one the rules chose) by kAutoMargin: the pilot's variance and the work model (17% worst error)
@@ -206,6 +252,13 @@ AutoDecision decide(Scene& scene) {
   d.chosen = candidates[chosen].name;
   scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);
+  if (d.chosen == "full, by region") {
+    char why[120];
+    std::snprintf(why, sizeof(why), "guided vertices in %.0f%% of the image's regions", 100.0 * regions.guidedShare());
+    d.reasons.push_back(why);
+    d.regions = regions;
+    scene.setGuidedRegions(std::move(regions));
+  }
   return d;
 }
 

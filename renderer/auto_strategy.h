@@ -13,6 +13,7 @@
 
 #include "settings.h"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,21 @@ struct AutoMeasurement {
   double efficiency = 0.0;        // 1 / (relativeVariance x workPerSample), relative to the best
 };
 
+// Scattering sampling by image region (auto's per-region choice): the one-sample probability q of
+// the guided vertex for the camera rays of each cell of a regionsX x regionsY grid over the image;
+// 0 where tracking alone was more efficient in the pilot. Empty: the settings' q everywhere.
+struct GuidedRegions {
+  int regionsX = 0, regionsY = 0;
+  std::vector<float> probability;  // row-major, regionsX x regionsY
+  bool empty() const { return probability.empty(); }
+  float at(int x, int y, int width, int height) const {
+    const int rx = std::min(regionsX - 1, x * regionsX / std::max(1, width));
+    const int ry = std::min(regionsY - 1, y * regionsY / std::max(1, height));
+    return probability[static_cast<size_t>(ry) * static_cast<size_t>(regionsX) + static_cast<size_t>(rx)];
+  }
+  double guidedShare() const;  // the share of regions with q > 0
+};
+
 struct AutoDecision {
   std::string chosen;
   std::vector<std::string> reasons;        // the scene rules that decided the candidates
@@ -45,6 +61,8 @@ struct AutoDecision {
   // preset its build.
   double probeSeconds = 0.0;
   int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;
+  // When the choice is "full, by region": where the camera rays take guided vertices.
+  GuidedRegions regions;
   // One line: "auto chose emission: volumes emit; ...; pilot: emission 1.00, full 0.62".
   std::string summary() const;
 };

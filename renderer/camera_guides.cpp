@@ -8,12 +8,18 @@
 
 namespace candela {
 
+float guidedProbabilityAt(const Scene& scene, int x, int y, int width, int height) {
+  const GuidedRegions& regions = scene.guidedRegions();
+  return regions.empty() ? scene.strategy().guiding.guided_probability : regions.at(x, y, width, height);
+}
+
 bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera) {
   const GuidingSettings& g = scene.strategy().guiding;
   if (g.guide != DistanceGuide::Probes) return false;
   char identity[64];
   std::snprintf(identity, sizeof identity, "%p/%p/", static_cast<const void*>(&scene), static_cast<const void*>(tracer.probes()));
-  const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(g).dump();
+  std::string key = identity + toJson(scene.desc().camera).dump() + toJson(g).dump();
+  for (float q : scene.guidedRegions().probability) key += std::to_string(q) + ",";  // auto's region map
   if (key == key_) return true;
   key_ = key;
   ++builds_;
@@ -21,6 +27,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   height_ = camera.height();
   const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
   views_.assign(pixels, PiecewiseLinearView{});
+  guides_.assign(pixels, CameraRayGuide{nullptr, 0.0f});
   present_.assign(pixels, 0);
   // Rows in parallel, each into its own buffer; then one flat array and the views into it.
   std::vector<std::vector<float>> rows(static_cast<size_t>(height_));
@@ -39,6 +46,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       for (DistanceKnot& k : guide.knots) k.t = (k.t - tIn) / length;
       unit.build(0.0f, 1.0f, guide.knots, g.floor);
       const PiecewiseLinearView v = unit.view();
+      guides_[i].guidedProbability = guidedProbabilityAt(scene, x, y, width_, height_);
       PiecewiseLinearView& stored = views_[i];
       stored = v;
       stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into `data_` below
@@ -65,6 +73,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       v.ts = start;
       v.vs = start + v.n;
       v.cdf = start + 2 * v.n;
+      guides_[i].table = &v;
     }
   }
   return true;

@@ -5,7 +5,7 @@
 // built once, from its centre ray, over the unit interval of that ray's medium interval; every
 // camera ray through the pixel borrows it, mapped onto its own interval (GuidedDistance::borrow).
 // The density then depends on the ray's pixel and position alone, never on the walk, so MIS stays
-// unbiased. Any change of the key (camera, probe set, guiding settings) rebuilds the tables.
+// unbiased. Any change of the key (camera, probe set, strategy) rebuilds the tables.
 #pragma once
 
 #include "distance_sampler.h"
@@ -18,19 +18,27 @@ namespace candela {
 
 class PathTracer;
 
+// The one-sample probability q for the camera rays through pixel (x, y) of a width x height image:
+// the settings' guided_probability, or where `auto` chose scattering sampling by region (its
+// pilot's region map, auto_strategy.h) the q of the pixel's region, 0 where tracking alone did
+// better. A function of the pixel alone, so MIS stays unbiased.
+float guidedProbabilityAt(const Scene& scene, int x, int y, int width, int height);
+
 class CameraGuides {
  public:
   // Makes the tables match `camera` and the tracer's scene and probes; rebuilds (in parallel)
   // only when something they depend on changed. Returns false when the strategy has no probe
   // guiding (then there is nothing to cache).
   bool prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera);
-  // The pixel's unit-interval table, or null when its centre ray gets no guided sample (rays
-  // through it then build their own density, as without the cache).
-  const PiecewiseLinearView* at(int x, int y) const {
-    const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-    return present_[i] ? &views_[i] : nullptr;
+  // The pixel's unit-interval table and q. A pixel whose centre ray gets no guided sample (no
+  // medium, thicker than guiding.max_optical_depth) has no table and q = 0: its rays get none
+  // either, a choice by pixel that spares every camera sample the interval and thickness walks.
+  const CameraRayGuide* at(int x, int y) const {
+    return &guides_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   }
-  size_t bytes() const { return data_.size() * sizeof(float) + views_.size() * (sizeof(PiecewiseLinearView) + 1); }
+  size_t bytes() const {
+    return data_.size() * sizeof(float) + views_.size() * (sizeof(PiecewiseLinearView) + sizeof(CameraRayGuide) + 1);
+  }
   int builds() const { return builds_; }  // how many times the tables were (re)built
 
  private:
@@ -38,6 +46,7 @@ class CameraGuides {
   int width_ = 0, height_ = 0;
   std::vector<float> data_;  // every pixel's ts, vs, cdf, back to back
   std::vector<PiecewiseLinearView> views_;
+  std::vector<CameraRayGuide> guides_;  // views_[i] and the pixel's q
   std::vector<char> present_;
   int builds_ = 0;
 };

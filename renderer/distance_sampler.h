@@ -37,6 +37,14 @@ struct PiecewiseLinearView {
   float linear(float t) const;
 };
 
+// What a pixel's camera rays use for their guided sample (renderer/camera_guides.h): the pixel's
+// unit-interval table, and the one-sample probability q of keeping the guided vertex. q = 0: the
+// pixel's rays get no guided sample at all (tracking alone serves them).
+struct CameraRayGuide {
+  const PiecewiseLinearView* table = nullptr;
+  float guidedProbability = 0.5f;
+};
+
 class PiecewiseLinearDistance {
  public:
   // Knots may be unsorted (they are sorted here) and may lie outside [t0, t1] (clamped).
@@ -85,6 +93,9 @@ class EquiAngularDistance {
 class GuidedDistance {
  public:
   std::vector<DistanceKnot> knots;  // scratch: the probes' knots of the segment being built
+  // one_sample MIS: the probability that this segment keeps the guided vertex (the settings' q, or
+  // the pixel's own q from the camera cache, camera_guides.h).
+  float guidedProbability = 0.5f;
 
   // From `knots` (sorted and clamped here).
   void buildPiecewiseLinear(float t0, float t1, float floor);

@@ -88,12 +88,12 @@ float PathTracer::majorantOpticalDepth(const Ray& ray, float t0, float t1) const
   return depth;
 }
 
-float PathTracer::guidedWeight(float r) const {
+float PathTracer::guidedWeight(float r, float guidedProbability) const {
   const GuidingSettings& g = scene_.strategy().guiding;
   switch (g.combination) {
     case GuideCombination::Balance: return 1.0f / (1.0f + r);
     // One-sample MIS: p_g / (q p_g + (1 - q) p_t), the selection probability q included.
-    case GuideCombination::OneSample: return 1.0f / (g.guided_probability + (1.0f - g.guided_probability) * r);
+    case GuideCombination::OneSample: return 1.0f / (guidedProbability + (1.0f - guidedProbability) * r);
     case GuideCombination::Power: return std::isfinite(r * r) ? 1.0f / (1.0f + r * r) : 0.0f;
     case GuideCombination::Average: return 0.5f;
     case GuideCombination::GuidedOnly: return 1.0f;
@@ -200,7 +200,7 @@ float PathTracer::unphasedIncident(const Vec3& p, int index, Rng& rng) const {
 
 Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const { return radiance(cameraRay, nullptr, rng); }
 
-Rgb PathTracer::radiance(const Ray& cameraRay, const PiecewiseLinearView* cameraGuide, Rng& rng) const {
+Rgb PathTracer::radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng) const {
   PathState state;
   state.ray = cameraRay;
   state.prevPos = cameraRay.origin;
@@ -376,18 +376,22 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
   return walk;
 }
 
-bool PathTracer::prepareGuide(const PathState& st, float tEnd, const PiecewiseLinearView* cameraGuide, GuidedDistance& guide) const {
+bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGuide* cameraGuide, GuidedDistance& guide) const {
   const GuidingSettings& g = scene_.strategy().guiding;
   if (g.guide == DistanceGuide::None || st.segment >= g.guided_segments || st.lightsTaken || st.vertices >= scene_.render().max_depth)
     return false;
+  const bool cached = st.segment == 0 && cameraGuide;
+  // A pixel whose q is 0 (no table, or auto's region map said tracking alone) gets no guided
+  // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
+  if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table)) return false;
   ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table
+  guide.guidedProbability = cached ? cameraGuide->guidedProbability : g.guided_probability;
   float tIn = 0.0f, tOut = 0.0f;
-  if (st.segment == 0 && cameraGuide) {
-    // The pixel's cached table (camera_guides.h), mapped onto this ray's own medium interval; the
-    // thickness test is the same one guideFor applies, so the cache changes cost, not choices.
+  if (cached) {
+    // The pixel's cached table (camera_guides.h), mapped onto this ray's own medium interval. The
+    // thickness test was made once for the pixel's centre ray: a choice by pixel, not per ray.
     if (!mediumInterval(st.ray, tEnd, tIn, tOut)) return false;
-    if (g.max_optical_depth > 0.0f && majorantOpticalDepth(st.ray, tIn, tOut) > g.max_optical_depth) return false;
-    guide.borrow(*cameraGuide, tIn, tOut);
+    guide.borrow(*cameraGuide->table, tIn, tOut);
     return true;
   }
   return guideFor(st.ray, tEnd, tIn, tOut, guide);
@@ -426,7 +430,7 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   // The vertex's NEE always uses its MIS-weighted throughput k = w_g T_hat mu_s / p_g (that is where
   // guiding pays off in thin media). In guided_vertex = path only the continuation is rouletted, with
   // probability min(1, k); in direct mode there is none (the tracked vertex carries the path).
-  const float weight = guidedWeight(nullProbability * scatterDensity / pdf);
+  const float weight = guidedWeight(nullProbability * scatterDensity / pdf, guide.guidedProbability);
   const float k = weight * ratio * sigmaS / pdf;
   if (!(k > 0.0f)) return Rgb(0.0f);
   const Medium& m = c.pick(s, rng.uniform());
@@ -438,7 +442,7 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   return L;
 }
 
-Rgb PathTracer::trace(PathState st, const PiecewiseLinearView* cameraGuide, Rng& rng) const {
+Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng) const {
   const Scene& s = scene_;
   const StrategySettings& strategy = s.strategy();
   const auto& lights = s.lights();
@@ -479,13 +483,14 @@ Rgb PathTracer::trace(PathState st, const PiecewiseLinearView* cameraGuide, Rng&
     if (guided) {
       const GuidingSettings& gs = strategy.guiding;
       const bool oneSample = gs.combination == GuideCombination::OneSample;
-      const bool guidedPicked = !oneSample || rng.uniform() < gs.guided_probability;
+      const float q = guide.guidedProbability;
+      const bool guidedPicked = !oneSample || rng.uniform() < q;
       if (walk.event == SegmentWalk::Event::Scattered) {
         const float pg = guide.pdf(walk.scatterT);
         const float pt = walk.nullProbability * walk.scatterDensity;
-        float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(pt / pg) : 1.0f;
+        float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(pt / pg, q) : 1.0f;
         // p_t / (q p_g + (1 - q) p_t) when the tracked vertex was picked, else nothing.
-        if (oneSample) trackedWeight = guidedPicked ? 0.0f : pt / (gs.guided_probability * pg + (1.0f - gs.guided_probability) * pt);
+        if (oneSample) trackedWeight = guidedPicked ? 0.0f : pt / (q * pg + (1.0f - q) * pt);
         if (strategy.guiding.guided_vertex == GuidedVertex::Path) {
           st.beta *= trackedWeight;
           trackedContinue = trackedWeight;

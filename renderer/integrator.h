@@ -37,8 +37,8 @@ class PathTracer {
   // rejects and counts such samples.
   Rgb radiance(const Ray& cameraRay, Rng& rng) const;
   // The same, with the camera ray's guided density borrowed from `cameraGuide` (a unit-interval
-  // table for the ray's pixel; null: built for the ray as usual).
-  Rgb radiance(const Ray& cameraRay, const PiecewiseLinearView* cameraGuide, Rng& rng) const;
+  // table for the ray's pixel and its q; null: built for the ray as usual).
+  Rgb radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng) const;
 
   // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy
   // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
@@ -81,12 +81,12 @@ class PathTracer {
 
   // Follows a path from its current ray to the end; returns the radiance it gathers. The camera
   // ray's guided density comes from `cameraGuide` when given.
-  Rgb trace(PathState state, const PiecewiseLinearView* cameraGuide, Rng& rng) const;
+  Rgb trace(PathState state, const CameraRayGuide* cameraGuide, Rng& rng) const;
   // The tracked walk along one segment (docs/method.md s.2): the one tracking loop with the strategy's
   // event probabilities (analogEvent or gatherEvent) as its collision callback. Adds emission to L.
   SegmentWalk walkSegment(PathState& state, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const;
   // Distance-sampler choice for one segment: whether it gets a guided sample, and its density.
-  bool prepareGuide(const PathState& state, float tEnd, const PiecewiseLinearView* cameraGuide, GuidedDistance& guide) const;
+  bool prepareGuide(const PathState& state, float tEnd, const CameraRayGuide* cameraGuide, GuidedDistance& guide) const;
   // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
   // false when the path ends there. The NEE is scaled by `directWeight` (an MIS weight on guided
   // segments); the continuation (not the NEE) survives with probability `continueProbability`
@@ -99,7 +99,7 @@ class PathTracer {
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
   float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
   // MIS weight of the guided technique given r = p_tracked / p_guided.
-  float guidedWeight(float r) const;
+  float guidedWeight(float r, float guidedProbability) const;
 
   Rgb directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis, Rng& rng) const;
   float visibility(const Vec3& p, const Vec3& wi, float distance, int targetLight, Rng& rng) const;

@@ -2,6 +2,9 @@
 // are the same for a seed whatever the thread count, and whatever it picks agrees with conventional
 // on the report scenes (the stability suite holds it to the stability cases).
 #include "auto_strategy.h"
+#include "camera_guides.h"
+#include "integrator.h"
+#include "renderer.h"
 #include "stats.h"
 #include "test_support.h"
 
@@ -71,6 +74,68 @@ TEST(AutoStrategy, ChoosingAutoAgainRedecidesButTheSameDecisionDoesNot) {
 }
 
 // Whatever auto picks converges to the conventional image on every report scene.
+// auto's per-region choice ("full, by region"): camera rays take guided vertices in some image
+// regions only. Any map of q by pixel is a sampling choice, so a checkerboard of q = 0, 0.5 and
+// 0.75 must agree with conventional, on a shaft scene and a flame beside shafts.
+class RegionMapAgreement : public testing::TestWithParam<const char*> {};
+
+TEST_P(RegionMapAgreement, ACheckerboardOfGuidedProbabilitiesAgreesWithConventional) {
+  const std::string file = std::string("assets/scenes/") + GetParam() + ".json";
+  const std::vector<std::string> base{"camera.resolution=[24,14]", "render.max_depth=6"};
+  std::vector<std::string> conv = base, full = base;
+  conv.push_back("strategy.preset=\"conventional\"");
+  full.push_back("strategy.preset=\"full\"");
+  full.push_back("render.seed=91");
+  const Film reference = test::render(test::loadScene(file, conv), 4096);
+  auto scene = Scene::build(test::loadScene(file, full));
+  GuidedRegions map;
+  map.regionsX = 6, map.regionsY = 4;
+  const float qs[] = {0.0f, 0.5f, 0.75f};
+  for (int i = 0; i < map.regionsX * map.regionsY; ++i) map.probability.push_back(qs[(i + i / map.regionsX) % 3]);
+  scene->setGuidedRegions(map);
+  ProgressiveRenderer renderer(scene, RenderOptions{0, 16});
+  Film film;
+  renderer.renderBudget(film, 1024, 0.0, 16);
+  const Agreement a = compareRenders(reference, film, 3, 2);
+  EXPECT_TRUE(a.agree) << GetParam() << ": " << a.worst;
+  EXPECT_EQ(film.rejectedSamples(), 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, RegionMapAgreement, testing::Values("god-rays-dark", "shed-fire"),
+                         [](const testing::TestParamInfo<const char*>& info) {
+                           std::string n = info.param;
+                           for (char& c : n)
+                             if (c == '-') c = '_';
+                           return n;
+                         });
+
+// The map reaches the camera rays: a pixel's cached guide carries its region's q (0: no guided
+// vertex), and a new strategy clears the map.
+TEST(AutoStrategy, ARegionMapSetsEachPixelsGuidedProbability) {
+  auto scene = Scene::build(test::loadScene("assets/scenes/god-rays-dark.json", {"strategy.preset=\"full\"", "camera.resolution=[32,18]"}));
+  GuidedRegions map;
+  map.regionsX = 2, map.regionsY = 1;
+  map.probability = {0.0f, 0.75f};
+  scene->setGuidedRegions(map);
+  EXPECT_EQ(guidedProbabilityAt(*scene, 3, 5, 32, 18), 0.0f);
+  EXPECT_EQ(guidedProbabilityAt(*scene, 20, 5, 32, 18), 0.75f);
+  const PathTracer tracer(*scene);
+  CameraGuides cache;
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  int guidedRight = 0;
+  for (int y = 0; y < 18; ++y) {
+    EXPECT_EQ(cache.at(5, y)->guidedProbability, 0.0f);
+    if (!cache.at(25, y)->table) continue;
+    EXPECT_EQ(cache.at(25, y)->guidedProbability, 0.75f);
+    ++guidedRight;
+  }
+  EXPECT_GT(guidedRight, 0);
+  scene->setStrategy(scene->strategy());
+  EXPECT_TRUE(scene->guidedRegions().empty()) << "a new strategy clears auto's map";
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  EXPECT_EQ(cache.builds(), 2) << "the map is part of the cache key";
+}
+
 class AutoAgreement : public testing::TestWithParam<const char*> {};
 
 TEST_P(AutoAgreement, AgreesWithConventional) {
@@ -89,7 +154,7 @@ TEST_P(AutoAgreement, AgreesWithConventional) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ReportScenes, AutoAgreement,
-                         testing::Values("torch-in-mist", "torch-in-fog", "fire", "god-rays", "god-rays-backlit", "god-rays-dark", "cloud"),
+                         testing::Values("torch-in-mist", "torch-in-fog", "fire", "god-rays", "god-rays-backlit", "god-rays-dark", "cloud", "shed-fire"),
                          [](const testing::TestParamInfo<const char*>& info) {
                            std::string n = info.param;
                            for (char& c : n)

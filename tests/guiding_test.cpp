@@ -291,10 +291,14 @@ TEST(CameraGuides, TablesEqualPerRayDensities) {
       GuidedDistance direct, borrowed;
       float tIn, tOut;
       const bool guided = tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, direct);
-      const PiecewiseLinearView* table = cache.at(x, y);
-      ASSERT_EQ(guided, table != nullptr) << x << "," << y;
-      if (!guided) continue;
-      borrowed.borrow(*table, tIn, tOut);
+      const CameraRayGuide* pixel = cache.at(x, y);
+      ASSERT_EQ(guided, pixel->table != nullptr) << x << "," << y;
+      if (!guided) {
+        EXPECT_EQ(pixel->guidedProbability, 0.0f) << "no table, no guided sample";
+        continue;
+      }
+      EXPECT_EQ(pixel->guidedProbability, scene->strategy().guiding.guided_probability) << "adaptive q is off";
+      borrowed.borrow(*pixel->table, tIn, tOut);
       for (int k = 0; k <= 16; ++k) {
         const float t = tIn + (tOut - tIn) * (k + 0.01f) / 16.02f;
         EXPECT_NEAR(borrowed.pdf(t), direct.pdf(t), 1e-3f * direct.pdf(t) + 1e-6f) << x << "," << y << " t " << t;
