@@ -96,7 +96,7 @@ int runReport(bool quick, const std::string& dir, int threads) {
   fs::create_directories(dir);
   const std::string tmp = (fs::path(dir) / ".tmp.png").string();
   const std::string assets = std::string(CANDELA_SOURCE_DIR) + "/assets/scenes/";
-  const std::vector<std::string> scenes{"torch-in-mist", "torch-in-fog", "fire", "god-rays", "god-rays-backlit", "god-rays-dark", "cloud"};
+  const std::vector<std::string> scenes{"torch-in-mist", "torch-in-fog", "fire", "god-rays", "god-rays-backlit", "god-rays-dark", "cloud", "shed-fire"};
   const std::vector<std::string>& presets = strategyPresetNames();
   const std::vector<double> budgets = quick ? std::vector<double>{0.25, 0.5, 1.0} : std::vector<double>{1.0, 2.0, 4.0, 8.0};
   const int divisor = quick ? 4 : 2;

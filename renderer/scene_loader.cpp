@@ -1,4 +1,5 @@
 #include "scene_desc.h"
+#include "auto_strategy.h"
 
 #include <cerrno>
 #include <cstring>
@@ -107,7 +108,8 @@ SceneDesc parseSceneDesc(const Json& doc, const std::string& file) {
   if (!doc.contains("camera")) throw InputError(file + ": camera: required field is missing");
   fromJson(doc["camera"], scene.camera, file, "camera");
   if (doc.contains("render")) fromJson(doc["render"], scene.render, file, "render");
-  if (doc.contains("strategy")) scene.strategy = strategyFromJson(doc["strategy"], file, "strategy");
+  // No strategy block: Candela chooses (auto_strategy.h), as it does for an opened VDB.
+  scene.strategy = doc.contains("strategy") ? strategyFromJson(doc["strategy"], file, "strategy") : autoBaseStrategy();
   scene.volumes = readList<VolumeDesc>(doc, "volumes", file);
   scene.lights = readList<LightDesc>(doc, "lights", file);
   scene.surfaces = readList<SurfaceDesc>(doc, "surfaces", file);
