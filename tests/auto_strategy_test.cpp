@@ -15,6 +15,14 @@
 namespace candela {
 namespace {
 
+// gtest names from scene names: "god-rays-dark" -> "god_rays_dark".
+std::string sceneTestName(const testing::TestParamInfo<const char*>& info) {
+  std::string n = info.param;
+  for (char& c : n)
+    if (c == '-') c = '_';
+  return n;
+}
+
 bool mentions(const AutoDecision& d, const std::string& text) {
   for (const auto& r : d.reasons)
     if (r.find(text) != std::string::npos) return true;
@@ -102,12 +110,7 @@ TEST_P(RegionMapAgreement, ACheckerboardOfGuidedProbabilitiesAgreesWithConventio
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RegionMapAgreement, testing::Values("god-rays-dark", "shed-fire"),
-                         [](const testing::TestParamInfo<const char*>& info) {
-                           std::string n = info.param;
-                           for (char& c : n)
-                             if (c == '-') c = '_';
-                           return n;
-                         });
+                         sceneTestName);
 
 // The map reaches the camera rays: a pixel's cached guide carries its region's q (0: no guided
 // vertex), and a new strategy clears the map.
@@ -155,12 +158,7 @@ TEST_P(AutoAgreement, AgreesWithConventional) {
 
 INSTANTIATE_TEST_SUITE_P(ReportScenes, AutoAgreement,
                          testing::Values("torch-in-mist", "torch-in-fog", "fire", "god-rays", "god-rays-backlit", "god-rays-dark", "cloud", "shed-fire"),
-                         [](const testing::TestParamInfo<const char*>& info) {
-                           std::string n = info.param;
-                           for (char& c : n)
-                             if (c == '-') c = '_';
-                           return n;
-                         });
+                         sceneTestName);
 
 }  // namespace
 }  // namespace candela
