@@ -70,6 +70,12 @@ class RenderSession {
   // the UI's fields return to what is rendering. Each is returned once.
   std::optional<SceneDesc> takeShownDesc();
   bool loading() const { return loading_.load(); }
+  // A finished open whose description the UI has not taken yet (takeShownDesc): loading() is
+  // already false then, but a scene did load.
+  bool openPending() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return shownDescUpdate_.has_value();
+  }
 
  private:
   void workerLoop();

@@ -32,7 +32,9 @@ bool ScriptedDriver::waitingForFullFrame(Viewer& v) {
   const bool fullFrame = v.frame_ && !v.frame_->preview && v.frame_->film.spp() > 0 && !v.session_.loading() && !v.pendingOpen_;
   if (fullFrame) return false;
   // A scripted run whose scene never loads must not wait forever.
-  if (v.options_.quit && !v.haveScene_ && !v.session_.loading() && std::chrono::duration<double>(Clock::now() - start_).count() > 2.0) {
+  // (A build that finished since the UI last polled the session is a loaded scene, not a failure.)
+  if (v.options_.quit && !v.haveScene_ && !v.session_.loading() && !v.session_.openPending() &&
+      std::chrono::duration<double>(Clock::now() - start_).count() > 2.0) {
     v.report("no scene could be loaded; quitting");
     v.exitCode_ = 1;
     v.quitNow_ = true;
