@@ -55,6 +55,24 @@ EmissionLight::EmissionLight(const Medium& medium, int cellSize) : medium_(&medi
     cdf_.push_back(static_cast<float>(acc));
   }
   cdf_.back() = 1.0f;
+  // The emission's spread about its centroid (energy-weighted mean squared distance, each cell's own
+  // extent included): the light-selection estimate treats the volume as a source that size.
+  const Vec3 cellDiagonal = glm::mat3(m) * layout_.cellExtent;
+  double spread2 = glm::dot(cellDiagonal, cellDiagonal) / 12.0;
+  for (int cell : cellOf_) {
+    const Vec3 centre = layout_.origin + (Vec3(layout_.cellCoords(cell)) + 0.5f) * layout_.cellExtent;
+    const Vec3 d = Vec3(m * glm::vec4(centre, 1.0f)) - centroid_;
+    spread2 += static_cast<double>(cellPdf_[static_cast<size_t>(cell)]) * glm::dot(d, d);
+  }
+  spread2_ = static_cast<float>(spread2);
+}
+
+LightImportance EmissionLight::importance() const {
+  LightImportance out;
+  out.intensity = power_ / (4.0f * kPi);  // an isotropic source of that power
+  out.position = centroid_;
+  out.spread2 = spread2_;
+  return out;
 }
 
 bool EmissionLight::sample(const Vec3& x, float u0, float u1, float u2, float u3, Vec3& wi) const {

@@ -6,6 +6,7 @@
 // the volume density converted to solid angle (Jacobian t^2) and integrated along the ray.
 #pragma once
 
+#include "lights.h"
 #include "majorant.h"
 
 #include <vector>
@@ -27,6 +28,10 @@ class EmissionLight {
   int cellSize() const { return cellSize_; }
   // Energy-weighted centre of the emission (world), the equi-angular target for this volume.
   const Vec3& centroid() const { return centroid_; }
+  // Energy-weighted mean squared distance of the emission from its centroid (world units squared).
+  float spread2() const { return spread2_; }
+  // Its entry in the light selection: a source of its power at the centroid, as large as its spread.
+  LightImportance importance() const;
 
   // Samples a direction from world point x toward the emission; returns false if it cannot.
   bool sample(const Vec3& x, float u0, float u1, float u2, float u3, Vec3& wi) const;
@@ -46,6 +51,7 @@ class EmissionLight {
   float cellVolume_ = 0.0f;      // world volume of one cell (the transform is affine)
   float power_ = 0.0f;
   Vec3 centroid_{0.0f};
+  float spread2_ = 0.0f;
 };
 
 }  // namespace candela

@@ -125,7 +125,7 @@ float PathTracer::volumeLightPdf(const Vec3& x, const Vec3& w) const {
   const int first = static_cast<int>(scene_.lights().size());
   float pdf = 0.0f;
   for (size_t m = 0; m < volumes.size(); ++m) {
-    const float pmf = scene_.lightSampler().pmf(first + static_cast<int>(m));
+    const float pmf = scene_.lightSampler().pmf(x, first + static_cast<int>(m));
     if (pmf > 0.0f) pdf += pmf * volumes[m]->pdf(x, w);
   }
   return pdf;
@@ -136,7 +136,8 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
   const LightSampler& sampler = scene_.lightSampler();
   if (sampler.empty()) return Rgb(0.0f);
   float pmf = 0.0f;
-  const int index = sampler.sample(rng.uniform(), pmf);
+  const int index = sampler.sample(p, rng.uniform(), pmf);
+  if (index < 0) return Rgb(0.0f);
   const bool onSurface = normal != Vec3(0.0f);
   auto scattering = [&](const Vec3& wi, Rgb& f, float& scatterPdf) {
     if (onSurface) {
@@ -512,7 +513,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
       if (!st.lightsTaken) {
         const Light& light = lights[static_cast<size_t>(lightHit)];
         const float w = st.prevPdf > 0.0f
-                            ? powerHeuristic(st.prevPdf, s.lightSampler().pmf(lightHit) * light.pdf(st.prevPos, ray.direction))
+                            ? powerHeuristic(st.prevPdf, s.lightSampler().pmf(st.prevPos, lightHit) * light.pdf(st.prevPos, ray.direction))
                             : 1.0f;
         L += st.beta * light.emitted() * w;
       }
@@ -522,7 +523,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
       if (!st.lightsTaken)
         for (size_t i = 0; i < lights.size(); ++i) {
           if (lights[i].type() != LightType::Environment) continue;
-          const float w = st.prevPdf > 0.0f ? powerHeuristic(st.prevPdf, s.lightSampler().pmf(static_cast<int>(i)) * kInv4Pi) : 1.0f;
+          const float w = st.prevPdf > 0.0f ? powerHeuristic(st.prevPdf, s.lightSampler().pmf(st.prevPos, static_cast<int>(i)) * kInv4Pi) : 1.0f;
           L += st.beta * lights[i].emitted() * w;
         }
       break;

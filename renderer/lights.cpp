@@ -1,6 +1,7 @@
 #include "lights.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace candela {
 
@@ -114,28 +115,88 @@ float Light::power(float sceneRadius) const {
   return 0.0f;
 }
 
-LightSampler::LightSampler(const std::vector<float>& powers) {
-  if (powers.empty()) return;
-  std::vector<float> power(powers.size());
-  float total = 0.0f;
-  for (size_t i = 0; i < powers.size(); ++i) total += power[i] = std::max(0.0f, std::isfinite(powers[i]) ? powers[i] : 0.0f);
-  if (!(total > 0.0f)) return;
-  pmf_.resize(powers.size());
-  cdf_.resize(powers.size());
-  float acc = 0.0f;
-  for (size_t i = 0; i < powers.size(); ++i) {
-    pmf_[i] = power[i] / total;
-    acc += pmf_[i];
-    cdf_[i] = acc;
+LightImportance Light::importance() const {
+  LightImportance out;
+  const float lum = std::max(0.0f, luminance(radiance_));
+  out.position = desc_.position;
+  switch (desc_.type) {
+    case LightType::Point:
+    case LightType::Spot: out.intensity = lum; break;  // radiance_ is the intensity: fluence I / d^2
+    case LightType::Sphere:
+      // Radiance L over a disc of radius r seen from d: fluence about pi r^2 L / d^2.
+      out.intensity = kPi * desc_.radius * desc_.radius * lum;
+      out.spread2 = desc_.radius * desc_.radius;
+      break;
+    case LightType::Directional:
+      out.atInfinity = true;
+      out.fluence = lum;  // radiance_ is the irradiance of the parallel beam
+      break;
+    case LightType::Environment:
+      out.atInfinity = true;
+      out.fluence = 4.0f * kPi * lum;
+      break;
   }
-  cdf_.back() = 1.0f;
+  return out;
 }
 
-int LightSampler::sample(float u, float& pmf) const {
-  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
-  int index = static_cast<int>(std::min<std::ptrdiff_t>(it - cdf_.begin(), static_cast<std::ptrdiff_t>(cdf_.size()) - 1));
-  pmf = pmf_[static_cast<size_t>(index)];
-  return index;
+float LightImportance::at(const Vec3& p) const {
+  if (atInfinity) return fluence;
+  const Vec3 d = position - p;
+  // The floor keeps a point light's own position finite; it is far below any shading distance.
+  return intensity / std::max(glm::dot(d, d) + spread2, 1e-12f);
+}
+
+LightSampler::LightSampler(std::vector<LightImportance> lights) : lights_(std::move(lights)) {
+  dark_.resize(lights_.size());
+  for (size_t i = 0; i < lights_.size(); ++i) {
+    const LightImportance& l = lights_[i];
+    const float scale = l.atInfinity ? l.fluence : l.intensity;
+    dark_[i] = !(scale > 0.0f) || !std::isfinite(scale) || !std::isfinite(l.spread2) || !std::isfinite(l.position.x) ||
+               !std::isfinite(l.position.y) || !std::isfinite(l.position.z);
+    lit_ += !dark_[i];
+  }
+}
+
+template <class F>
+void LightSampler::forEachWeight(const Vec3& p, F&& f) const {
+  for (size_t i = 0; i < lights_.size(); ++i) f(static_cast<int>(i), dark_[i] ? 0.0f : lights_[i].at(p));
+}
+
+float LightSampler::pmf(const Vec3& p, int index) const {
+  if (lit_ == 0 || index < 0 || static_cast<size_t>(index) >= lights_.size() || dark_[static_cast<size_t>(index)]) return 0.0f;
+  float total = 0.0f, own = 0.0f;
+  forEachWeight(p, [&](int i, float w) {
+    total += w;
+    if (i == index) own = w;
+  });
+  const float uniform = 1.0f / static_cast<float>(lit_);
+  // A point so far that every weight underflows (or one that overflows) falls back to uniform.
+  if (!(total > 0.0f) || !std::isfinite(total)) return uniform;
+  return (1.0f - kDefensiveShare) * (own / total) + kDefensiveShare * uniform;
+}
+
+int LightSampler::sample(const Vec3& p, float u, float& pmf) const {
+  pmf = 0.0f;
+  if (lit_ == 0) return -1;
+  float total = 0.0f;
+  forEachWeight(p, [&](int, float w) { total += w; });
+  const bool usable = total > 0.0f && std::isfinite(total);
+  const float uniform = 1.0f / static_cast<float>(lit_);
+  int last = -1;
+  float acc = 0.0f;
+  for (size_t i = 0; i < lights_.size(); ++i) {
+    if (dark_[i]) continue;
+    const float share = usable ? (1.0f - kDefensiveShare) * (lights_[i].at(p) / total) + kDefensiveShare * uniform : uniform;
+    last = static_cast<int>(i);
+    acc += share;
+    if (u < acc) {
+      pmf = share;
+      return last;
+    }
+  }
+  // Rounding left u above the sum: the last lit light, with the probability pmf() reports.
+  pmf = this->pmf(p, last);
+  return last;
 }
 
 }  // namespace candela

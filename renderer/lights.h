@@ -1,5 +1,5 @@
 // Lights: point, spot, directional, sphere area light and constant environment, and the light
-// selection distribution (proportional to an estimate of each light's power).
+// selection distribution (in proportion to an estimate of each light's fluence at the shading point).
 #pragma once
 
 #include "scene_desc.h"
@@ -16,6 +16,20 @@ struct LightSample {
   bool delta = false;
 };
 
+// How bright a light looks from a point, roughly: its unoccluded fluence (incident radiance integrated
+// over the sphere, in luminance). Finite lights: intensity / (d^2 + spread2), d the distance to
+// `position` (spread2, the light's squared size, keeps it finite at and inside the light); lights at
+// infinity: a constant. Occlusion and media are ignored: it only steers the light selection.
+struct LightImportance {
+  float intensity = 0.0f;  // finite lights: fluence times squared distance, far away
+  Vec3 position{0.0f};
+  float spread2 = 0.0f;
+  float fluence = 0.0f;    // lights at infinity
+  bool atInfinity = false;
+
+  float at(const Vec3& p) const;
+};
+
 class Light {
  public:
   explicit Light(const LightDesc& desc);
@@ -30,8 +44,11 @@ class Light {
   Rgb emitted() const { return radiance_; }
   // Ray-sphere hit distance, or infinity (sphere lights only).
   float intersect(const Ray& ray, float tMax) const;
-  // Power estimate for light selection; `sceneRadius` sizes directional and environment lights.
+  // Power estimate (equi-angular target weights, input checks); `sceneRadius` sizes directional and
+  // environment lights.
   float power(float sceneRadius) const;
+  // Its entry in the light selection (LightImportance).
+  LightImportance importance() const;
 
  private:
   LightDesc desc_;
@@ -40,19 +57,34 @@ class Light {
   float cosOuter_ = 0.0f, cosInner_ = 1.0f;
 };
 
-// Picks a light with probability proportional to its power (a discrete CDF). Entries are the
-// scene's lights followed by its emissive volumes (when they are sampled as lights).
+// Picks a light for next-event estimation with a probability that depends on the shading point: in
+// proportion to each light's estimated fluence there (LightImportance), mixed with a uniform share
+// (kDefensiveShare) so that a light the estimate underrates (an occluded key light, a sky seen
+// through a window) is still sampled. A global, power-based choice spends most samples on whatever
+// is largest (a faint sky around a whole scene outweighed a torch flame 6 to 1, and a sun a campfire
+// 240 to 1), however far it is from the point. Entries are the scene's lights followed by its
+// emissive volumes (when they are sampled as lights). The pmf is a function of the point only, so
+// the MIS weights that use it (phase-sampled rays meeting a light) stay exact (docs/method.md s.3).
 class LightSampler {
  public:
+  static constexpr float kDefensiveShare = 0.2f;
+
   LightSampler() = default;
-  explicit LightSampler(const std::vector<float>& powers);
-  bool empty() const { return cdf_.empty(); }
-  int sample(float u, float& pmf) const;
-  // 0 for a light the sampler never picks (every light dark: the sampler is empty).
-  float pmf(int index) const { return static_cast<size_t>(index) < pmf_.size() ? pmf_[static_cast<size_t>(index)] : 0.0f; }
+  explicit LightSampler(std::vector<LightImportance> lights);
+  bool empty() const { return lit_ == 0; }
+  int size() const { return static_cast<int>(lights_.size()); }
+  // Draws a light for point p; `pmf` receives its probability. -1 when the sampler is empty.
+  int sample(const Vec3& p, float u, float& pmf) const;
+  // The probability that sample(p, ...) picks `index`: 0 for a dark light or an empty sampler.
+  float pmf(const Vec3& p, int index) const;
 
  private:
-  std::vector<float> cdf_, pmf_;
+  // Selection weights at p (each light's share before the defensive mix), summed into `total`.
+  template <class F>
+  void forEachWeight(const Vec3& p, F&& f) const;
+  std::vector<LightImportance> lights_;
+  std::vector<bool> dark_;
+  int lit_ = 0;
 };
 
 }  // namespace candela

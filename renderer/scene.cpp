@@ -310,16 +310,17 @@ Scene::~Scene() {
 }
 
 void Scene::buildLightSampler() {
-  // Lights and emissive volumes compete by power (talk 2.1: emissive volumes are lights).
-  std::vector<float> powers;
-  for (const Light& l : lights_) powers.push_back(l.power(radius_));
+  // Lights and emissive volumes compete by their estimated fluence at the shading point (talk 2.1:
+  // emissive volumes are lights).
+  std::vector<LightImportance> importance;
+  for (const Light& l : lights_) importance.push_back(l.importance());
   volumeLights_.clear();
   for (const auto& m : media_)
     if (const EmissionLight* e = m->emissionLight(); e && !e->empty()) {
       volumeLights_.push_back(e);
-      powers.push_back(e->power());
+      importance.push_back(e->importance());
     }
-  lightSampler_ = LightSampler(powers);
+  lightSampler_ = LightSampler(std::move(importance));
 }
 
 }  // namespace candela

@@ -88,6 +88,12 @@ Agreement compareRenders(const Film& a, const Film& b, int blocksX, int blocksY,
   return compare(ra, means, &ses, alpha);
 }
 
+Agreement compareToEstimates(const Film& film, int blocksX, int blocksY, const std::vector<RegionEstimate>& expected, double alpha) {
+  std::vector<Rgb> means, ses;
+  for (const auto& r : expected) means.push_back(r.mean), ses.push_back(r.standardError);
+  return compare(regionEstimates(film, blocksX, blocksY), means, &ses, alpha);
+}
+
 Agreement compareToExpected(const Film& film, int blocksX, int blocksY, const std::vector<Rgb>& expected, double alpha) {
   return compare(regionEstimates(film, blocksX, blocksY), expected, nullptr, alpha);
 }

@@ -35,6 +35,10 @@ struct Agreement {
 // Heavy-tailed estimators (conventional tracking of small bright emitters) need enough samples for
 // their standard error to be trustworthy; callers choose spp accordingly.
 Agreement compareRenders(const Film& a, const Film& b, int blocksX, int blocksY, double alpha = 1e-3);
+// A render against region estimates made elsewhere (the sum of renders of parts of a scene, say),
+// with their standard errors: regions as regionEstimates(film, blocksX, blocksY) splits them.
+Agreement compareToEstimates(const Film& film, int blocksX, int blocksY, const std::vector<RegionEstimate>& expected,
+                             double alpha = 1e-3);
 // A render against a known value per region and channel (closed forms).
 Agreement compareToExpected(const Film& film, int blocksX, int blocksY, const std::vector<Rgb>& expected, double alpha = 1e-3);
 

@@ -106,7 +106,7 @@ TEST(EmissionLight, CellProbabilitiesSumToOneAndFollowEnergy) {
   EXPECT_NEAR(sum, 1.0, 1e-5);
   EXPECT_GT(light.power(), 0.0f);
   // A light-selection entry with power: volume lights compete with the environment.
-  EXPECT_GT(scene->lightSampler().pmf(static_cast<int>(scene->lights().size())), 0.5f);
+  EXPECT_GT(scene->lightSampler().pmf(light.centroid(), static_cast<int>(scene->lights().size())), 0.5f);
 }
 
 TEST(EmissionLight, NonEmissiveVolumesAreNotLightsAndCostNothing) {
