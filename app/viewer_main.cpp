@@ -80,9 +80,10 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "candela: --panes: unknown strategy preset \"%s\" (expected one of %s)\n", p.c_str(), presets.c_str());
       return 2;
     }
-  // No scene and no other mode: the talk's Fig. 1 live, conventional | + emission | + scattering (MIS).
+  // No scene and no other mode: the talk's Fig. 1 live, conventional | + emission | + scattering (MIS),
+  // and beside them what Candela chooses by itself (auto, the default for the artist's own scenes).
   if (o.scenePath.empty() && o.panes.empty() && o.preset.empty() && o.screenshotPath.empty() && o.measureEdits == 0 && o.dropPath.empty())
-    o.panes = {"conventional", "emission", "full"};
+    o.panes = {"conventional", "emission", "full", "auto"};
   if (!o.figurePath.empty() && (o.panes.empty() || o.equalTime <= 0.0)) {
     std::fprintf(stderr, "candela: --figure needs --panes and --equal-time\n");
     return 2;
