@@ -1,5 +1,6 @@
 #include "auto_strategy.h"
 
+#include "convergence.h"
 #include "integrator.h"
 #include "renderer.h"
 #include "scene.h"
@@ -169,41 +170,15 @@ AutoDecision decide(Scene& scene) {
     ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
-    // Variance per sample, pooled over 8 x 8-pixel regions: the pixels' mean sample variance over the
-    // squared region mean (+ the relMSE epsilon), averaged over regions: the expected relMSE of one
-    // sample per pixel.
-    const int w = film.width(), h = film.height(), n = film.spp();
-    const std::vector<float>& sum = film.sum();
-    const std::vector<float>& sumSq = film.sumSquares();
-    double imageMean = 0.0;
-    for (float v : sum) imageMean += v / n;
-    imageMean /= std::max<size_t>(1, sum.size());
-    // The relMSE's epsilon (convergence.h), so the pilot ranks as the report's relMSE does.
-    const double eps = (0.1 * imageMean) * (0.1 * imageMean) + 1e-30;
+    // Variance per sample, pooled over 8 x 8-pixel regions (convergence.h), averaged over regions:
+    // the expected relMSE of one sample per pixel, ranked as the report's relMSE ranks.
+    regional = regionalRelativeVariance(film, 8, regionsX, regionsY);
     double total = 0.0;
-    int regions = 0;
-    regional.clear();
-    regionsX = (w + 7) / 8, regionsY = (h + 7) / 8;
-    for (int ry = 0; ry < h; ry += 8)
-      for (int rx = 0; rx < w; rx += 8) {
-        double var = 0.0, mean = 0.0;
-        int count = 0;
-        for (int y = ry; y < std::min(h, ry + 8); ++y)
-          for (int x = rx; x < std::min(w, rx + 8); ++x)
-            for (int ch = 0; ch < 3; ++ch, ++count) {
-              const size_t i = 3 * (static_cast<size_t>(y) * w + x) + ch;
-              const double m = sum[i] / n;
-              var += std::max(0.0, (sumSq[i] / n - m * m) * n / (n - 1.0));
-              mean += m;
-            }
-        mean /= count;
-        regional.push_back((var / count) / (mean * mean + eps));
-        total += regional.back();
-        ++regions;
-      }
+    for (double v : regional) total += v;
+    const size_t regions = regional.size();
     AutoMeasurement m;
     m.name = c.name;
-    m.relativeVariance = total / std::max(1, regions);
+    m.relativeVariance = total / static_cast<double>(std::max<size_t>(1, regions));
     const WorkCounters& work = renderer.work();
     m.workPerSample = work.cost() / std::max<double>(1.0, static_cast<double>(work.samples));
     m.efficiency = 1.0 / std::max(1e-300, m.relativeVariance * m.workPerSample);

@@ -64,6 +64,48 @@ const char* const kRelMseFormula =
     "relmse = mean over pixels and channels of (I - R)^2 / (R^2 + eps) with eps = (0.1 * mean(R))^2; "
     "mse = mean over pixels and channels of (I - R)^2; I the render, R the reference";
 
+std::vector<double> regionalRelativeVariance(const Film& film, int regionSize, int& regionsX, int& regionsY) {
+  std::vector<double> out;
+  const int w = film.width(), h = film.height(), n = film.spp();
+  const int size = std::max(1, regionSize);
+  regionsX = (w + size - 1) / size, regionsY = (h + size - 1) / size;
+  if (n < 2) return out;
+  const std::vector<float>& sum = film.sum();
+  const std::vector<float>& sumSq = film.sumSquares();
+  double imageMean = 0.0;
+  for (float v : sum) imageMean += static_cast<double>(v) / n;
+  imageMean /= std::max<size_t>(1, sum.size());
+  const double eps = (0.1 * imageMean) * (0.1 * imageMean) + 1e-30;
+  for (int ry = 0; ry < h; ry += size)
+    for (int rx = 0; rx < w; rx += size) {
+      // Per channel, as the relMSE is: a red flame's faint blue weighs as much as its red.
+      double relative = 0.0;
+      for (int ch = 0; ch < 3; ++ch) {
+        double var = 0.0, mean = 0.0;
+        int count = 0;
+        for (int y = ry; y < std::min(h, ry + size); ++y)
+          for (int x = rx; x < std::min(w, rx + size); ++x, ++count) {
+            const size_t i = 3 * (static_cast<size_t>(y) * w + x) + ch;
+            const double m = static_cast<double>(sum[i]) / n;
+            var += std::max(0.0, (static_cast<double>(sumSq[i]) / n - m * m) * n / (n - 1.0));
+            mean += m;
+          }
+        mean /= count;
+        relative += (var / count) / (mean * mean + eps);
+      }
+      out.push_back(relative / 3.0);
+    }
+  return out;
+}
+
+double relativeVariancePerSample(const Film& film) {
+  int rx = 0, ry = 0;
+  const std::vector<double> regions = regionalRelativeVariance(film, 8, rx, ry);
+  double total = 0.0;
+  for (double v : regions) total += v;
+  return regions.empty() ? 0.0 : total / static_cast<double>(regions.size());
+}
+
 ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference) {
   ErrorMetrics e;
   if (image.size() != reference.size() || image.empty()) return {NAN, NAN};

@@ -2,6 +2,8 @@
 // cached high-spp references, and the convergence CSV and SVG chart.
 #pragma once
 
+#include "film.h"
+
 #include "image_io.h"
 #include "scene_desc.h"
 
@@ -19,6 +21,15 @@ struct ErrorMetrics {
 // relmse = mean over pixels and channels of (I - R)^2 / (R^2 + eps), eps = (0.01 * mean(R))^2 ... see kRelMseFormula
 extern const char* const kRelMseFormula;
 ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference);
+// A render's own noise figure, no reference needed. Per square region of `regionSize` pixels and per
+// channel: the mean over its pixels of one sample's variance (the film's sums of squares) over the
+// region's mean^2 + eps, eps as the relMSE's from the image mean; averaged over the channels. Pooling the mean over a region
+// keeps a pixel that caught a rare bright sample from normalising its own variance away. Row-major,
+// regionsX x regionsY; empty below 2 spp. The auto strategy's pilot ranks candidates by it.
+std::vector<double> regionalRelativeVariance(const Film& film, int regionSize, int& regionsX, int& regionsY);
+// Its mean over 8 x 8-pixel regions: about the relMSE one sample per pixel would have (relMSE x spp
+// of a converged render). 0 below 2 spp.
+double relativeVariancePerSample(const Film& film);
 // An error map for display: per pixel, averaged over channels, |I - R| / mean(R) (absolute) or
 // |I - R| / sqrt(R^2 + eps) with the relMSE's eps (relative), in false colour on a log scale from
 // 0.01 (black) through blue, green, yellow, red to 10 (white). Interleaved RGB in [0, 1].

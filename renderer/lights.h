@@ -67,7 +67,9 @@ class Light {
 // the MIS weights that use it (phase-sampled rays meeting a light) stay exact (docs/method.md s.3).
 class LightSampler {
  public:
-  static constexpr float kDefensiveShare = 0.2f;
+  // 0.2 measured 4-11% less efficient than 0.1 on god-rays and shed-fire (a sky or a campfire taking
+  // samples from the sun) and no better on torch-in-mist.
+  static constexpr float kDefensiveShare = 0.1f;
 
   LightSampler() = default;
   explicit LightSampler(std::vector<LightImportance> lights);

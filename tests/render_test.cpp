@@ -1,6 +1,7 @@
 // Progressive renderer properties: determinism across thread counts, cancellation, NaN rejection,
 // the statistical agreement helper (it accepts independent renders and catches a small bias), and
 // agreement of the conventional estimator across majorant policies (every policy is unbiased).
+#include "convergence.h"
 #include "stats.h"
 #include "test_support.h"
 
@@ -71,6 +72,24 @@ TEST(Film, RejectsAndCountsNonFiniteOrNegativeSamples) {
   EXPECT_EQ(film.rejectedSamples(), 3u);
   EXPECT_FLOAT_EQ(film.mean(0, 0).r, 0.5f);  // rejected samples count as zero, keeping the mean normalised
   EXPECT_TRUE(isFinite(film.mean(1, 0)));
+}
+
+TEST(Film, RelativeVariancePerSampleIsTheOneSampleRelMse) {
+  Film film(4, 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) {
+      film.addSample(x, y, Rgb(0.0f));
+      film.addSample(x, y, Rgb(2.0f));
+    }
+  film.setPassSpp(2);
+  // Every pixel: mean 1, unbiased sample variance 2; eps = (0.1 x 1)^2.
+  EXPECT_NEAR(relativeVariancePerSample(film), 2.0 / 1.01, 1e-6);
+  Film constant(2, 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 2; ++x)
+      for (int k = 0; k < 3; ++k) constant.addSample(x, y, Rgb(0.5f));
+  constant.setPassSpp(3);
+  EXPECT_NEAR(relativeVariancePerSample(constant), 0.0, 1e-9);
 }
 
 TEST(Agreement, AcceptsIndependentRendersAndCatchesAThreePercentBias) {
