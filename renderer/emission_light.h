@@ -28,8 +28,6 @@ class EmissionLight {
   int cellSize() const { return cellSize_; }
   // Energy-weighted centre of the emission (world), the equi-angular target for this volume.
   const Vec3& centroid() const { return centroid_; }
-  // Energy-weighted mean squared distance of the emission from its centroid (world units squared).
-  float spread2() const { return spread2_; }
   // Its entry in the light selection: a source of its power at the centroid, as large as its spread.
   LightImportance importance() const;
 
@@ -51,7 +49,7 @@ class EmissionLight {
   float cellVolume_ = 0.0f;      // world volume of one cell (the transform is affine)
   float power_ = 0.0f;
   Vec3 centroid_{0.0f};
-  float spread2_ = 0.0f;
+  float spread2_ = 0.0f;  // energy-weighted mean squared distance from the centroid (world units^2)
 };
 
 }  // namespace candela

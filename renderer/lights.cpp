@@ -157,40 +157,38 @@ LightSampler::LightSampler(std::vector<LightImportance> lights) : lights_(std::m
   }
 }
 
-template <class F>
-void LightSampler::forEachWeight(const Vec3& p, F&& f) const {
-  for (size_t i = 0; i < lights_.size(); ++i) f(static_cast<int>(i), dark_[i] ? 0.0f : lights_[i].at(p));
+float LightSampler::totalWeight(const Vec3& p) const {
+  float total = 0.0f;
+  for (size_t i = 0; i < lights_.size(); ++i)
+    if (!dark_[i]) total += lights_[i].at(p);
+  return total;
+}
+
+float LightSampler::share(float weight, float total) const {
+  const float uniform = 1.0f / static_cast<float>(lit_);
+  // A point so far that every weight underflows (or one that overflows) falls back to uniform.
+  if (!(total > 0.0f) || !std::isfinite(total)) return uniform;
+  return (1.0f - kDefensiveShare) * (weight / total) + kDefensiveShare * uniform;
 }
 
 float LightSampler::pmf(const Vec3& p, int index) const {
   if (lit_ == 0 || index < 0 || static_cast<size_t>(index) >= lights_.size() || dark_[static_cast<size_t>(index)]) return 0.0f;
-  float total = 0.0f, own = 0.0f;
-  forEachWeight(p, [&](int i, float w) {
-    total += w;
-    if (i == index) own = w;
-  });
-  const float uniform = 1.0f / static_cast<float>(lit_);
-  // A point so far that every weight underflows (or one that overflows) falls back to uniform.
-  if (!(total > 0.0f) || !std::isfinite(total)) return uniform;
-  return (1.0f - kDefensiveShare) * (own / total) + kDefensiveShare * uniform;
+  return share(lights_[static_cast<size_t>(index)].at(p), totalWeight(p));
 }
 
 int LightSampler::sample(const Vec3& p, float u, float& pmf) const {
   pmf = 0.0f;
   if (lit_ == 0) return -1;
-  float total = 0.0f;
-  forEachWeight(p, [&](int, float w) { total += w; });
-  const bool usable = total > 0.0f && std::isfinite(total);
-  const float uniform = 1.0f / static_cast<float>(lit_);
+  const float total = totalWeight(p);
   int last = -1;
   float acc = 0.0f;
   for (size_t i = 0; i < lights_.size(); ++i) {
     if (dark_[i]) continue;
-    const float share = usable ? (1.0f - kDefensiveShare) * (lights_[i].at(p) / total) + kDefensiveShare * uniform : uniform;
+    const float probability = share(lights_[i].at(p), total);
     last = static_cast<int>(i);
-    acc += share;
+    acc += probability;
     if (u < acc) {
-      pmf = share;
+      pmf = probability;
       return last;
     }
   }

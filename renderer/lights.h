@@ -81,9 +81,9 @@ class LightSampler {
   float pmf(const Vec3& p, int index) const;
 
  private:
-  // Selection weights at p (each light's share before the defensive mix), summed into `total`.
-  template <class F>
-  void forEachWeight(const Vec3& p, F&& f) const;
+  // The sum of the lit lights' estimates at p, and a light's probability given its estimate and that sum.
+  float totalWeight(const Vec3& p) const;
+  float share(float weight, float total) const;
   std::vector<LightImportance> lights_;
   std::vector<bool> dark_;
   int lit_ = 0;
