@@ -90,9 +90,10 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   if (!quiet) {
     const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
     std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples, "
-                "relative variance per sample %.4g\n",
+                "relative variance per sample %.4g, work per sample %.4g\n",
                 scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
-                paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()), relativeVariancePerSample(film));
+                paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()), relativeVariancePerSample(film),
+                renderer.work().cost() / std::max(1.0, static_cast<double>(renderer.work().samples)));
     std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
   }
   if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) std::fprintf(stderr, "warning: %s: %s\n", scenePath.c_str(), w.c_str());
@@ -311,6 +312,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
                        ", expected the scene's " + std::to_string(scene->camera().width()) + "x" + std::to_string(scene->camera().height()));
     // auto's decision (rules, probes, pilot) is charged to its time: it renders for what is left.
     const double pilot = scene->autoDecision() ? scene->autoDecision()->pilotSeconds - scene->autoDecision()->probeSeconds : 0.0;
+    const double pilotWork = scene->autoDecision() ? scene->autoDecision()->pilotWork : 0.0;
     for (double budget : times) {
       ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
       Film film;
@@ -319,6 +321,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
       p.budgetSeconds = budget;
       p.seconds = pilot + renderer.renderBudget(film, 0, std::max(0.01, budget - pilot), 1);
       p.spp = film.spp();
+      p.work = pilotWork + renderer.work().cost();
       p.rejected = film.rejectedSamples();
       const ErrorMetrics e = film.spp() > 0 ? imageError(film.meanImage(), reference.rgb) : ErrorMetrics{NAN, NAN};
       p.mse = e.mse;
@@ -350,7 +353,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
   // relMSE weighs every pixel's relative error (dark pixels count as much as bright ones); the
   // absolute MSE's efficiency is printed beside it because the two can rank strategies differently.
   std::printf("\nefficiency = 1 / (relMSE x time) at the largest budget (%.2f s); absolute: 1 / (MSE x time):\n", times.back());
-  double base = 0.0, baseAbsolute = 0.0;
+  double base = 0.0, baseAbsolute = 0.0, baseWork = 0.0, baseWorkAbsolute = 0.0;
   std::string baseLabel;
   for (const auto& p : points) {
     if (p.budgetSeconds != times.back()) continue;
@@ -358,6 +361,16 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     if (base == 0.0) base = eff, baseAbsolute = absolute, baseLabel = p.strategy;
     std::printf("  %-28s %10.4g   (x%.2f vs %s)   absolute %10.4g (x%.2f)\n", p.strategy.c_str(), eff, eff / base, baseLabel.c_str(), absolute,
                 absolute / baseAbsolute);
+  }
+  // The same ratios with counted work for time: the clock varies 15-30% between runs of one command
+  // on a shared machine, the work counts do not (the work model's fit to time is within about 20%).
+  std::printf("by counted work instead of time (work.h; no clock), 1 / (relMSE x work) / 1 / (MSE x work):\n");
+  for (const auto& p : points) {
+    if (p.budgetSeconds != times.back()) continue;
+    const double eff = 1.0 / (p.relmse * p.work), absolute = 1.0 / (p.mse * p.work);
+    if (baseWork == 0.0) baseWork = eff, baseWorkAbsolute = absolute;
+    std::printf("  %-28s x%.2f / x%.2f vs %s   (%.3g work per sample per pixel)\n", p.strategy.c_str(), eff / baseWork, absolute / baseWorkAbsolute,
+                baseLabel.c_str(), p.work / std::max(1.0, static_cast<double>(p.spp) * reference.width * reference.height));
   }
   std::printf("wrote %s and %s\n", csv.c_str(), svg.c_str());
   return 0;

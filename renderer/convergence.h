@@ -51,6 +51,9 @@ struct ConvergencePoint {
   double mse = 0.0;
   double relmse = 0.0;
   uint64_t rejected = 0;
+  // Counted work (work.h: calibrated nanoseconds on one core, never the clock), auto's pilot included:
+  // efficiency by work, 1 / (relMSE x work), ranks strategies without the clock's noise.
+  double work = 0.0;
 };
 
 // Efficiency 1 / (relMSE x time) versus a swept parameter, one line per strategy; x is logarithmic

@@ -64,6 +64,13 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
     emissionMaxima_ = footprintMaxima(majorant_.layout(), density_.activeBox(), [this] {
       return [sampler = Sampler(*this)](int x, int y, int z) { return sampler.sourceLuminanceAtVoxel(x, y, z); };
     });
+    // 1% of the mean positive maximum; 1 when no voxel centre emits (the source may still, between
+    // a dense voxel with no emission and an emitting one with no density).
+    double sum = 0.0;
+    size_t positive = 0;
+    for (float m : emissionMaxima_)
+      if (m > 0.0f) sum += m, ++positive;
+    emissionFloor_ = positive ? static_cast<float>(0.01 * sum / static_cast<double>(positive)) : 1.0f;
   }
   if (strategy.emission.light_sampling && emissive_) {
     if (!emissionLight_ || emissionLight_->cellSize() != strategy.emission.grid_cell_size)
@@ -93,8 +100,10 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   // Capped even at c = 0: past about 1000 collisions per voxel a walk would not end (input_limits.h).
   const float cap = (policy.emission_cap > 0.0f ? policy.emission_cap : 1000.0f) / voxelSize_;
   cellMajorant_.resize(majorant_.cellCount());
+  transmittanceMajorant_.resize(majorant_.cellCount());
   for (size_t i = 0; i < cellMajorant_.size(); ++i) {
     float muBar = majorant_.maxDensities()[i] * scale;
+    transmittanceMajorant_[i] = muBar;
     if (emissionTerm) muBar = std::max(muBar, std::min(emissionMaxima_[i] * emissionScale, cap));
     // Emission per unit length where nothing extinguishes: collisions at rate min(maj(E), c / voxel)
     // so the emission is gathered (any mu_bar > 0 there keeps it unbiased; this one is cheap).

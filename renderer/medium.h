@@ -46,6 +46,16 @@ class Medium {
   void applyStrategy(const StrategySettings& strategy);
   // The combined majorant mu_bar of a cell of the majorant grid (world units).
   float cellMajorant(int cell) const { return cellMajorant_[static_cast<size_t>(cell)]; }
+  // The majorant of mu_t alone (no emission term): light rays, which need only the transmittance
+  // there (tracking.h), walk it.
+  float transmittanceCellMajorant(int cell) const { return transmittanceMajorant_[static_cast<size_t>(cell)]; }
+  // Per majorant cell, the maximum of lum(source) over its footprint, when built (an emission term in
+  // the strategy's majorant, or emission per unit length); empty otherwise.
+  const std::vector<float>& emissionMaxima() const { return emissionMaxima_; }
+  // A small positive weight for every cell the medium may be in (emissionAlongRay): the maxima are
+  // of the source at voxel centres, and sigma_t x Le of two trilinear fields can exceed them between
+  // voxels (a dense voxel with no emission beside an emitting one with no density).
+  float emissionFloor() const { return emissionFloor_; }
   // The combined majorant mu_bar at an index-space point (0 outside the majorant domain).
   float majorantAt(const Vec3& indexPos) const {
     if (majorant_.empty()) return 0.0f;
@@ -113,6 +123,8 @@ class Medium {
   float radianceScale_ = 0.0f;
   std::unique_ptr<EmissionLight> emissionLight_;
   std::vector<float> cellMajorant_;
+  std::vector<float> transmittanceMajorant_;
+  float emissionFloor_ = 1.0f;
   float voxelSize_ = 1.0f;
   int index_ = 0;
 };

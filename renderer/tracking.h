@@ -10,6 +10,8 @@
 #include "medium.h"
 #include "rng.h"
 
+#include <algorithm>
+#include <optional>
 #include <vector>
 
 namespace candela {
@@ -30,7 +32,9 @@ struct MediumTrack {
   float t0 = 0.0f, t1 = 0.0f;  // current DDA segment
   float muBar = 0.0f;          // its majorant
   bool done = false;           // left its domain
-  explicit MediumTrack(const Medium& m) : medium(&m), sampler(m) {}
+  bool lightRay = false;       // walks the majorant of mu_t alone (transmittance only)
+  MediumTrack(const Medium& m, bool light) : medium(&m), sampler(m), lightRay(light) {}
+  float cellMajorant(int cell) const { return lightRay ? medium->transmittanceCellMajorant(cell) : medium->cellMajorant(cell); }
 };
 
 // A tentative collision. Coefficients are evaluated for the media overlapping the point.
@@ -73,22 +77,23 @@ struct Collision {
 
 // Walks tentative collisions along `ray` over (0, tMax). `onCollision(Collision&)` returns true to
 // continue, false to stop. Returns true when the walk reached tMax (or left all media), false when
-// the callback stopped it.
+// the callback stopped it. `transmittanceOnly`: the walk serves a transmittance estimate alone and
+// takes the majorant of mu_t (no emission term, so no collisions spent where nothing extinguishes).
 template <class OnCollision>
-bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng, OnCollision&& onCollision) {
+bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng, OnCollision&& onCollision, bool transmittanceOnly = false) {
   // Set up every medium whose majorant domain the ray crosses. Stack storage: no allocation.
   alignas(MediumTrack) unsigned char storage[kMaxMedia * sizeof(MediumTrack)];
   MediumTrack* tracks = reinterpret_cast<MediumTrack*>(storage);
   int n = 0;
   for (const Medium* m : view.media) {
-    MediumTrack* tr = new (&tracks[n]) MediumTrack(*m);
+    MediumTrack* tr = new (&tracks[n]) MediumTrack(*m, transmittanceOnly);
     const Mat4& ifw = m->indexFromWorld();
     tr->o = Vec3(ifw * glm::vec4(ray.origin, 1.0f));
     tr->d = Vec3(ifw * glm::vec4(ray.direction, 0.0f));
     tr->dda = MajorantDda(m->majorantGrid(), tr->o, tr->d, 0.0f, tMax);
     int cell;
     if (tr->dda.next(tr->t0, tr->t1, cell)) {
-      tr->muBar = m->cellMajorant(cell);
+      tr->muBar = tr->cellMajorant(cell);
       ++n;
     } else {
       tr->~MediumTrack();
@@ -148,7 +153,7 @@ bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng
       if (tr.t1 <= t) {
         int cell;
         if (tr.dda.next(tr.t0, tr.t1, cell)) {
-          tr.muBar = tr.medium->cellMajorant(cell);
+          tr.muBar = tr.cellMajorant(cell);
         } else {
           tr.done = true;
           continue;
@@ -176,15 +181,15 @@ inline float ratioTrackingTransmittance(const MediaView& view, const Ray& ray, f
       transmittance = 0.1f;
     }
     return true;
-  });
+  }, true);
   return transmittance;
 }
 
-// Algorithm 1 of the talk: the emission integral along a ray by ratio tracking, where only the
-// emission is needed (NEE toward emissive volumes, probe learning): L += w mu_a Le / mu_bar,
-// w *= mu_n / mu_bar at every tentative collision. It includes the transmittance of every medium
-// in between. Roulette keeps long walks cheap and the estimate unbiased.
-inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
+// Algorithm 1 of the talk: the emission integral along a ray by ratio tracking with the
+// emission-aware majorant: L += w mu_a Le / mu_bar, w *= mu_n / mu_bar at every tentative collision.
+// It includes the transmittance of every medium in between. Roulette keeps long walks cheap and the
+// estimate unbiased. emissionAlongRay's fallback.
+inline Rgb emissionByCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
   Rgb radiance(0.0f);
   float weight = 1.0f;
   trackCollisions(view, ray, tMax, rng, [&](const Collision& c) {
@@ -196,6 +201,103 @@ inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, R
     }
     return weight > 0.0f;
   });
+  return radiance;
+}
+
+// The emission integral along a light ray, int_0^tMax T(t) S(t) dt with S = sum_m mu_a,m Le,m
+// (talk Eq. 1), where only the emission is needed (NEE toward emissive volumes, probe learning),
+// at kEmissionPoints points instead of at every collision of the emission-aware majorant
+// (docs/method.md s.3, "The emission integral of a light sample"):
+// - the points are drawn in proportion to each emissive medium's per-cell emission maximum along the
+//   ray (a piecewise-constant density over its majorant cells), stratified: one in each 1/N of that
+//   density's CDF;
+// - T(t_j) comes from one ratio-tracking walk with the majorant of mu_t alone, read at each point on
+//   the way (its running product, roulette included, estimates T(t) without bias at every t).
+// Unbiased: the density is positive wherever a medium may emit (every cell of an emissive medium with
+// a positive majorant or maximum has at least Medium::emissionFloor).
+// Without emission maxima (no emission term in the strategy's majorant) or past kMaxEmissionCells
+// cells it falls back to emissionByCollisions.
+inline constexpr int kEmissionPoints = 8;
+inline constexpr int kMaxEmissionCells = 256;
+inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
+  struct Cell {
+    float t0, t1, maximum;
+    int medium;
+  };
+  Cell cells[kMaxEmissionCells];
+  int count = 0;
+  double total = 0.0;
+  for (size_t m = 0; m < view.media.size(); ++m) {
+    const Medium& medium = *view.media[m];
+    if (!medium.emissive()) continue;
+    const std::vector<float>& maxima = medium.emissionMaxima();
+    if (maxima.empty() || medium.majorantGrid().empty()) return emissionByCollisions(view, ray, tMax, rng);
+    const Mat4& ifw = medium.indexFromWorld();
+    MajorantDda dda(medium.majorantGrid(), Vec3(ifw * glm::vec4(ray.origin, 1.0f)), Vec3(ifw * glm::vec4(ray.direction, 0.0f)), 0.0f, tMax);
+    float t0 = 0.0f, t1 = 0.0f;
+    int cell = 0;
+    while (dda.next(t0, t1, cell)) {
+      ++threadWork().segments;
+      // Every cell where the medium may be (or emit) gets the floor: the density stays positive
+      // wherever the source may be.
+      float maximum = maxima[static_cast<size_t>(cell)];
+      if ((!(maximum > 0.0f) && !(medium.transmittanceCellMajorant(cell) > 0.0f)) || !(t1 > t0)) continue;
+      maximum += medium.emissionFloor();
+      if (count == kMaxEmissionCells) return emissionByCollisions(view, ray, tMax, rng);
+      cells[count++] = {t0, t1, maximum, static_cast<int>(m)};
+      total += static_cast<double>(maximum) * (t1 - t0);
+    }
+  }
+  if (!(total > 0.0)) return Rgb(0.0f);
+
+  struct Point {
+    float t, pdf;
+    int medium;
+  };
+  Point points[kEmissionPoints];
+  int c = 0;
+  double before = 0.0;  // the CDF's mass before cell c
+  for (int j = 0; j < kEmissionPoints; ++j) {
+    const double target = (j + static_cast<double>(rng.uniform())) / kEmissionPoints * total;
+    double mass = static_cast<double>(cells[c].maximum) * (cells[c].t1 - cells[c].t0);
+    while (c + 1 < count && before + mass <= target) {
+      before += mass;
+      ++c;
+      mass = static_cast<double>(cells[c].maximum) * (cells[c].t1 - cells[c].t0);
+    }
+    const double f = std::clamp((target - before) / mass, 0.0, 1.0);
+    points[j] = {cells[c].t0 + static_cast<float>(f) * (cells[c].t1 - cells[c].t0), static_cast<float>(cells[c].maximum / total), cells[c].medium};
+  }
+  std::sort(points, points + kEmissionPoints, [](const Point& a, const Point& b) { return a.t < b.t; });
+
+  std::optional<Medium::Sampler> samplers[kMaxMedia];
+  Rgb radiance(0.0f);
+  float weight = 1.0f;
+  int next = 0;
+  auto gatherBefore = [&](float t) {
+    for (; next < kEmissionPoints && points[next].t < t; ++next) {
+      const Point& q = points[next];
+      const Medium& medium = *view.media[static_cast<size_t>(q.medium)];
+      std::optional<Medium::Sampler>& sampler = samplers[q.medium];
+      if (!sampler) sampler.emplace(medium);
+      ++threadWork().collisions;  // a density and an emission lookup, as a collision's
+      const Vec3 index = Vec3(medium.indexFromWorld() * glm::vec4(ray.at(q.t), 1.0f));
+      radiance += sampler->source(index, sampler->sigmaT(index)) * (weight / (kEmissionPoints * q.pdf));
+    }
+  };
+  trackCollisions(view, ray, points[kEmissionPoints - 1].t, rng, [&](const Collision& col) {
+    gatherBefore(col.t);
+    weight *= std::max(0.0f, 1.0f - col.sigmaTTotal / col.muBar);
+    if (weight < 0.1f) {
+      if (rng.uniform() >= weight * 10.0f) {
+        weight = 0.0f;
+        return false;
+      }
+      weight = 0.1f;
+    }
+    return weight > 0.0f;
+  }, true);
+  if (weight > 0.0f) gatherBefore(kInfinity);
   return radiance;
 }
 

@@ -133,6 +133,48 @@ TEST(ClosedForm, EmissionOnlySlab) {
   EXPECT_EQ(film.rejectedSamples(), 0u);
 }
 
+// The emission integral of a light sample (tracking.h, emissionAlongRay: stratified points in
+// proportion to the emission majorant, transmittance by ratio tracking) against the slab's closed
+// form Le (1 - exp(-tau)), for rays through, into, out of and across the slab, with the majorant
+// policies that give it emission maxima (and without: the collision estimator it falls back to).
+TEST(ClosedForm, EmissionIntegralOfALightRay) {
+  const std::vector<std::string> policies[] = {
+      {"strategy.majorant.emission_term=true", "strategy.majorant.emission_weight=10"},
+      {"strategy.majorant.emission_term=true", "strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=1"},
+      {"strategy.majorant.emission_term=true", "strategy.majorant.structure=\"global\""},
+      {},  // no emission term: no maxima, the collision estimator
+  };
+  const Rgb le = blackbody()(1500.0f);
+  struct Case {
+    Ray ray;
+    float tMax, tau;
+  };
+  const Vec3 oblique = glm::normalize(Vec3(0.6f, 0.0f, -0.8f));
+  const Case cases[] = {
+      {{Vec3(0.1f, -0.2f, 3.0f), Vec3(0.0f, 0.0f, -1.0f)}, 10.0f, 1.0f},       // straight through: tau = 2 x 0.5
+      {{Vec3(0.1f, -0.2f, 3.0f), Vec3(0.0f, 0.0f, -1.0f)}, 2.875f, 0.25f},    // stopped a quarter of the way in
+      {{Vec3(0.0f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, -1.0f)}, 10.0f, 0.5f},       // from the middle out
+      {{Vec3(-1.0f, 0.3f, 2.0f), oblique}, 10.0f, 1.0f / 0.8f},                // across, 1 / cos longer
+  };
+  for (const auto& policy : policies) {
+    auto scene = Scene::build(test::loadScene("assets/scenes/test/emission-slab.json", policy));
+    EXPECT_EQ(scene->media().media[0]->emissionMaxima().empty(), policy.empty());
+    for (const Case& c : cases) {
+      constexpr int kRuns = 20000;
+      Rng rng(7, 3);
+      double s = 0.0, s2 = 0.0;
+      for (int i = 0; i < kRuns; ++i) {
+        const double v = luminance(emissionAlongRay(scene->media(), c.ray, c.tMax, rng));
+        s += v;
+        s2 += v * v;
+      }
+      const double mean = s / kRuns, error = std::sqrt(std::max(0.0, s2 / kRuns - mean * mean) / kRuns);
+      const double expected = luminance(le) * (1.0 - std::exp(-c.tau));
+      EXPECT_NEAR(mean, expected, 5.0 * error + 1e-4) << (policy.empty() ? "no emission term" : policy.back()) << ", tau " << c.tau;
+    }
+  }
+}
+
 TEST(ClosedForm, DiffusePlaneUnderASphereLightWithMis) {
   const SceneDesc desc = test::loadScene("assets/scenes/test/sphere-light.json");
   auto scene = Scene::build(desc);
