@@ -166,21 +166,26 @@ bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng
   return true;
 }
 
+// Roulette once a ratio-tracking weight is small: survive with probability 10 w and carry 0.1, so the
+// expectation stays w. False when the walk ends (w is then 0).
+inline bool rouletteSmallWeight(float& weight, Rng& rng) {
+  if (weight < 0.1f) {
+    if (rng.uniform() >= weight * 10.0f) {
+      weight = 0.0f;
+      return false;
+    }
+    weight = 0.1f;
+  }
+  return weight > 0.0f;
+}
+
 // Ratio-tracking transmittance (Novak et al. 2014) with Russian roulette once it is small:
 // T *= mu_n / mu_bar at every tentative collision. Unbiased; returns 0..1.
 inline float ratioTrackingTransmittance(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
   float transmittance = 1.0f;
   trackCollisions(view, ray, tMax, rng, [&](const Collision& c) {
     transmittance *= std::max(0.0f, 1.0f - c.sigmaTTotal / c.muBar);
-    if (transmittance < 0.1f) {
-      // Roulette: survive with probability 10 T and carry 0.1, so the expectation stays T.
-      if (rng.uniform() >= transmittance * 10.0f) {
-        transmittance = 0.0f;
-        return false;
-      }
-      transmittance = 0.1f;
-    }
-    return true;
+    return rouletteSmallWeight(transmittance, rng);
   }, true);
   return transmittance;
 }
@@ -195,11 +200,7 @@ inline Rgb emissionByCollisions(const MediaView& view, const Ray& ray, float tMa
   trackCollisions(view, ray, tMax, rng, [&](const Collision& c) {
     radiance += c.emissionSource() * (weight / c.muBar);
     weight *= std::max(0.0f, 1.0f - c.sigmaTTotal / c.muBar);
-    if (weight < 0.1f) {
-      if (rng.uniform() >= weight * 10.0f) return false;
-      weight = 0.1f;
-    }
-    return weight > 0.0f;
+    return rouletteSmallWeight(weight, rng);
   });
   return radiance;
 }
@@ -288,14 +289,7 @@ inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, R
   trackCollisions(view, ray, points[kEmissionPoints - 1].t, rng, [&](const Collision& col) {
     gatherBefore(col.t);
     weight *= std::max(0.0f, 1.0f - col.sigmaTTotal / col.muBar);
-    if (weight < 0.1f) {
-      if (rng.uniform() >= weight * 10.0f) {
-        weight = 0.0f;
-        return false;
-      }
-      weight = 0.1f;
-    }
-    return weight > 0.0f;
+    return rouletteSmallWeight(weight, rng);
   }, true);
   if (weight > 0.0f) gatherBefore(kInfinity);
   return radiance;
