@@ -11,6 +11,7 @@
 #include "rng.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -32,9 +33,9 @@ struct MediumTrack {
   float t0 = 0.0f, t1 = 0.0f;  // current DDA segment
   float muBar = 0.0f;          // its majorant
   bool done = false;           // left its domain
-  bool lightRay = false;       // walks the majorant of mu_t alone (transmittance only)
-  MediumTrack(const Medium& m, bool light) : medium(&m), sampler(m), lightRay(light) {}
-  float cellMajorant(int cell) const { return lightRay ? medium->transmittanceCellMajorant(cell) : medium->cellMajorant(cell); }
+  bool transmittanceOnly = false;  // walks the majorant of mu_t alone (trackCollisions)
+  MediumTrack(const Medium& m, bool transmittance) : medium(&m), sampler(m), transmittanceOnly(transmittance) {}
+  float cellMajorant(int cell) const { return transmittanceOnly ? medium->transmittanceCellMajorant(cell) : medium->cellMajorant(cell); }
 };
 
 // A tentative collision. Coefficients are evaluated for the media overlapping the point.
@@ -222,7 +223,9 @@ inline constexpr int kEmissionPoints = 8;
 inline constexpr int kMaxEmissionCells = 256;
 inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, Rng& rng) {
   struct Cell {
-    float t0, t1, maximum;
+    float t0, t1;
+    float density;  // the cell's emission maximum plus the floor: p(t) = density / total
+    double mass;    // density x (t1 - t0)
     int medium;
   };
   Cell cells[kMaxEmissionCells];
@@ -241,15 +244,17 @@ inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, R
       ++threadWork().segments;
       // Every cell where the medium may be (or emit) gets the floor: the density stays positive
       // wherever the source may be.
-      float maximum = maxima[static_cast<size_t>(cell)];
+      const float maximum = maxima[static_cast<size_t>(cell)];
       if ((!(maximum > 0.0f) && !(medium.transmittanceCellMajorant(cell) > 0.0f)) || !(t1 > t0)) continue;
-      maximum += medium.emissionFloor();
       if (count == kMaxEmissionCells) return emissionByCollisions(view, ray, tMax, rng);
-      cells[count++] = {t0, t1, maximum, static_cast<int>(m)};
-      total += static_cast<double>(maximum) * (t1 - t0);
+      const float density = maximum + medium.emissionFloor();
+      cells[count++] = {t0, t1, density, static_cast<double>(density) * (t1 - t0), static_cast<int>(m)};
+      total += cells[count - 1].mass;
     }
   }
   if (!(total > 0.0)) return Rgb(0.0f);
+  // Maxima too large for a finite CDF: the collision estimator needs none.
+  if (!std::isfinite(total)) return emissionByCollisions(view, ray, tMax, rng);
 
   struct Point {
     float t, pdf;
@@ -260,14 +265,10 @@ inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, R
   double before = 0.0;  // the CDF's mass before cell c
   for (int j = 0; j < kEmissionPoints; ++j) {
     const double target = (j + static_cast<double>(rng.uniform())) / kEmissionPoints * total;
-    double mass = static_cast<double>(cells[c].maximum) * (cells[c].t1 - cells[c].t0);
-    while (c + 1 < count && before + mass <= target) {
-      before += mass;
-      ++c;
-      mass = static_cast<double>(cells[c].maximum) * (cells[c].t1 - cells[c].t0);
-    }
-    const double f = std::clamp((target - before) / mass, 0.0, 1.0);
-    points[j] = {cells[c].t0 + static_cast<float>(f) * (cells[c].t1 - cells[c].t0), static_cast<float>(cells[c].maximum / total), cells[c].medium};
+    while (c + 1 < count && before + cells[c].mass <= target) before += cells[c++].mass;
+    const Cell& in = cells[c];
+    const double f = std::clamp((target - before) / in.mass, 0.0, 1.0);
+    points[j] = {in.t0 + static_cast<float>(f) * (in.t1 - in.t0), static_cast<float>(in.density / total), in.medium};
   }
   std::sort(points, points + kEmissionPoints, [](const Point& a, const Point& b) { return a.t < b.t; });
 
