@@ -131,6 +131,34 @@ float PathTracer::volumeLightPdf(const Vec3& x, const Vec3& w) const {
   return pdf;
 }
 
+float PathTracer::continuationShareTowardVolumes(const Vec3& x, float& volumeShare) const {
+  volumeShare = 0.0f;
+  const EmissionSettings& e = scene_.strategy().emission;
+  if (!(e.continuation_toward_volumes > 0.0f) || scene_.volumeLights().empty()) return 0.0f;
+  const int first = static_cast<int>(scene_.lights().size());
+  for (size_t m = 0; m < scene_.volumeLights().size(); ++m) volumeShare += scene_.lightSampler().pmf(x, first + static_cast<int>(m));
+  // Scaled by the volumes' share of the light at x: where the sun or the sky outshines a flame, the
+  // phase function keeps the continuations (measured: shed-fire's haze loses otherwise).
+  return e.continuation_toward_volumes * std::min(1.0f, volumeShare);
+}
+
+float PathTracer::volumeDirectionPdf(const Vec3& x, const Vec3& w, float volumeShare) const {
+  return volumeShare > 0.0f ? volumeLightPdf(x, w) / volumeShare : 0.0f;
+}
+
+bool PathTracer::sampleVolumeDirection(const Vec3& x, float volumeShare, Rng& rng, Vec3& wi) const {
+  const auto& volumes = scene_.volumeLights();
+  const int first = static_cast<int>(scene_.lights().size());
+  float u = rng.uniform() * volumeShare;
+  const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+  for (size_t m = 0; m < volumes.size(); ++m) {
+    const float pmf = scene_.lightSampler().pmf(x, first + static_cast<int>(m));
+    if (pmf > 0.0f && (u < pmf || m + 1 == volumes.size())) return volumes[m]->sample(x, u0, u1, u2, u3, wi);
+    u -= pmf;
+  }
+  return false;
+}
+
 Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis,
                             Rng& rng) const {
   const LightSampler& sampler = scene_.lightSampler();
@@ -154,6 +182,16 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
   Rgb f;
   float scatterPdf;
   const size_t lightCount = scene_.lights().size();
+  // The continuation this NEE competes with (MIS) is a mixture at medium vertices with continuations
+  // toward emissive volumes (docs/method.md s.3b): its pdf, given the phase pdf and, when known, the
+  // volume-light pdf of wi.
+  float volumeShare = 0.0f;
+  const float towardVolumes = (useMis && !onSurface) ? continuationShareTowardVolumes(p, volumeShare) : 0.0f;
+  auto continuationPdf = [&](const Vec3& wi, float phasePdf, float knownVolumeLightPdf) {
+    if (!(towardVolumes > 0.0f)) return phasePdf;
+    const float lightPdf = knownVolumeLightPdf >= 0.0f ? knownVolumeLightPdf : volumeLightPdf(p, wi);
+    return (1.0f - towardVolumes) * phasePdf + towardVolumes * lightPdf / volumeShare;
+  };
   if (static_cast<size_t>(index) >= lightCount) {
     // An emissive volume (talk 2.1, Algorithm 2): a direction from its energy grid, the emission
     // integral along it by Algorithm 1, over the mixture pdf of all volume lights.
@@ -166,7 +204,7 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
     const Ray ray{p, wi};
     const Rgb emitted = emissionAlongRay(scene_.media(), ray, nearestOccluder(ray), rng);
     if (isBlack(emitted)) return Rgb(0.0f);
-    const float weight = useMis ? powerHeuristic(lightPdf, scatterPdf) : 1.0f;
+    const float weight = useMis ? powerHeuristic(lightPdf, continuationPdf(wi, scatterPdf, lightPdf)) : 1.0f;
     return f * emitted * (weight / lightPdf);
   }
   const Light& light = scene_.lights()[static_cast<size_t>(index)];
@@ -177,7 +215,7 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
   const float tr = visibility(p, ls.wi, ls.distance, index, rng);
   if (tr <= 0.0f) return Rgb(0.0f);
   const float lightPdf = ls.pdf * pmf;
-  const float weight = (ls.delta || !useMis) ? 1.0f : powerHeuristic(lightPdf, scatterPdf);
+  const float weight = (ls.delta || !useMis) ? 1.0f : powerHeuristic(lightPdf, continuationPdf(ls.wi, scatterPdf, -1.0f));
   return f * ls.radiance * (tr * weight / lightPdf);
 }
 
@@ -232,8 +270,25 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
     if (rng.uniform() >= q) return false;
     st.beta /= q;
   }
+  // The continuation: HG sampling, or with continuation_toward_volumes a one-sample mixture of HG
+  // and the emissive volumes' direction density, weighted by the mixture's pdf (docs/method.md s.3b).
+  float volumeShare = 0.0f;
+  const float towardVolumes = continuationShareTowardVolumes(p, volumeShare);
   float pdf;
-  const Vec3 wi = hgSample(wo, g, Vec2(rng.uniform(), rng.uniform()), pdf);
+  Vec3 wi;
+  if (towardVolumes > 0.0f && rng.uniform() < towardVolumes) {
+    if (!sampleVolumeDirection(p, volumeShare, rng, wi)) return false;
+    pdf = hgEval(wo, wi, g);
+  } else {
+    wi = hgSample(wo, g, Vec2(rng.uniform(), rng.uniform()), pdf);
+  }
+  st.prevVolumeLightPdf = -1.0f;
+  if (towardVolumes > 0.0f) {
+    st.prevVolumeLightPdf = volumeLightPdf(p, wi);
+    const float mixture = (1.0f - towardVolumes) * pdf + towardVolumes * st.prevVolumeLightPdf / volumeShare;
+    st.beta *= pdf / mixture;
+    pdf = mixture;
+  }
   st.prevPdf = pdf;
   st.prevPos = p;
   st.ray = Ray{p, wi};
@@ -466,7 +521,9 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
 
     // Emission met along a phase/BSDF-sampled ray competes with NEE toward emissive volumes.
     const float emissionWeight =
-        (volumeNee && st.prevPdf > 0.0f) ? powerHeuristic(st.prevPdf, volumeLightPdf(st.prevPos, ray.direction)) : 1.0f;
+        (volumeNee && st.prevPdf > 0.0f)
+            ? powerHeuristic(st.prevPdf, st.prevVolumeLightPdf >= 0.0f ? st.prevVolumeLightPdf : volumeLightPdf(st.prevPos, ray.direction))
+            : 1.0f;
 
     // A guided distance sample for this segment (talk 2.2)? Its density must exist before the
     // tracked walk, whose scattering is weighted against it; the guided sample starts from the
@@ -549,6 +606,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     const Vec3 wi = toWorld(local, n);
     st.beta *= hit.albedo;
     st.prevPdf = local.z * kInvPi;
+    st.prevVolumeLightPdf = -1.0f;
     st.prevPos = p;
     st.ray = Ray{p, wi};
     ++st.segment;

@@ -14,6 +14,10 @@
 //   p_tracked = prod(P_null) * mu_bar(t) P_s(t) (docs/method.md s.4; Miller et al. 2019). Emission
 //   along the ray is counted once, by the tracked walk. By default (guiding.guided_vertex = direct)
 //   the guided vertex adds only its direct light and the tracked vertex carries the path.
+// - direction sampler: HG at medium vertices, cosine at surfaces; with
+//   strategy.emission.continuation_toward_volumes a medium vertex's continuation is a one-sample
+//   mixture of HG and the emissive volumes' direction density, and every MIS weight against it uses
+//   the mixture's pdf (docs/method.md s.3b).
 // Scattering does next-event estimation (ratio-tracked transmittance, or Algorithm 1 toward
 // emissive volumes), then samples HG; surfaces are diffuse.
 //
@@ -60,6 +64,15 @@ class PathTracer {
   // sum_m pmf_m p_m(w) over emissive volumes (Algorithm 2 for each).
   float volumeLightPdf(const Vec3& x, const Vec3& w) const;
 
+  // Continuations toward emissive volumes (strategy.emission.continuation_toward_volumes;
+  // docs/method.md s.3b): the share of a medium vertex's continuations drawn toward them at x (0 when
+  // off), the direction density of that technique (Algorithm 2's densities mixed by the light
+  // sampler's pmf of each volume at x, normalised), and a sample of it. `volumeShare` receives the
+  // light sampler's total pmf of the volumes at x.
+  float continuationShareTowardVolumes(const Vec3& x, float& volumeShare) const;
+  float volumeDirectionPdf(const Vec3& x, const Vec3& w, float volumeShare) const;
+  bool sampleVolumeDirection(const Vec3& x, float volumeShare, Rng& rng, Vec3& wi) const;
+
   // The part of [0, tEnd] where some medium may be non-zero; false when there is none.
   bool mediumInterval(const Ray& ray, float tEnd, float& tIn, float& tOut) const;
   // The probe set this tracer samples (null without probe guiding).
@@ -75,6 +88,7 @@ class PathTracer {
     int segment = 0;           // index of `ray` along the path (0: the camera ray)
     bool lightsTaken = false;  // the last vertex already took all direct light by NEE
     float prevPdf = 0.0f;      // solid-angle pdf of the direction that made `ray` (0: camera ray)
+    float prevVolumeLightPdf = -1.0f;  // volumeLightPdf(prevPos, ray.direction) when already known, else < 0
     Vec3 prevPos{0.0f};
   };
   struct SegmentWalk;  // what the tracked walk of one segment found (integrator.cpp)

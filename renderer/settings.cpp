@@ -19,6 +19,9 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
     s.majorant.emission_weight = 10.0f;  // the efficiency sweet spot measured on fire and torch-in-mist
     s.emission.gather_every_collision = true;
     s.emission.light_sampling = true;
+    // Continuations aimed at the emissive volumes reach the glow a flame lights around it
+    // (docs/method.md s.3b; measured in README, "Continuations toward emissive volumes").
+    s.emission.continuation_toward_volumes = 0.25f;
     // Talk s.2.2: plus probe-guided distance sampling with MIS (the talk's Fig. 1 right), or the
     // equi-angular baseline in the same MIS slot.
     if (name == "full") {

@@ -57,6 +57,10 @@ struct EmissionSettings {
   bool gather_every_collision = false;  // P_a = P_n = 1: add mu_a Le / mu_bar at every collision
   bool light_sampling = false;          // emissive volumes are lights: NEE via the energy grid + MIS
   int grid_cell_size = 4;               // voxels per cell of the emission-energy-distribution grid
+  // Share of the continuation directions at medium vertices drawn toward emissive volumes (their
+  // energy-grid direction density) instead of from the phase function, scaled at each vertex by the
+  // light sampler's share of those volumes there; one-sample MIS over the mixture (docs/method.md s.3b).
+  float continuation_toward_volumes = 0.0f;
 
   template <class V>
   void visit(V& v) {
@@ -65,6 +69,11 @@ struct EmissionSettings {
     v.field("light_sampling", light_sampling,
             "Treat emissive volumes as light sources: next-event estimation toward them, MIS with phase/BSDF sampling");
     v.field("grid_cell_size", grid_cell_size, "Voxels per cell of the emission-energy grid used to sample emissive volumes", Range{1, 4096});
+    v.field("continuation_toward_volumes", continuation_toward_volumes,
+            "Share of the paths' continuations at medium vertices aimed at emissive volumes (times the light sampler's share of "
+            "them at the vertex), the rest by the phase function; the mixture's pdf weights both, so the image is unchanged. "
+            "Reaches the glow that a flame lights in the medium around it. Needs light_sampling; 0: phase sampling only",
+            Range{0.0, 0.9});
   }
 };
 

@@ -31,6 +31,9 @@ const std::vector<Variant>& variants() {
       {"gathering only", {"strategy.emission.gather_every_collision=true"}},
       {"volume NEE only", {"strategy.emission.light_sampling=true", "strategy.emission.grid_cell_size=8"}},
       {"majorant term only", {"strategy.majorant.emission_term=true", "strategy.majorant.emission_weight=1e6"}},
+      // docs/method.md s.3b: continuations aimed at the volumes, at the largest share and not at all.
+      {"continuations toward volumes", {"strategy.emission.light_sampling=true", "strategy.emission.continuation_toward_volumes=0.9"}},
+      {"emission preset, phase continuations", {"strategy.preset=\"emission\"", "strategy.emission.continuation_toward_volumes=0"}},
   };
   return v;
 }

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
 namespace candela {
 namespace {
 
@@ -22,7 +24,8 @@ std::shared_ptr<Scene> torchOnly(const std::vector<std::string>& extra = {}) {
 // Directions around x binned by (cos theta about `axis`, phi) over cos theta in [cosMin, 1]: the
 // histogram of sample() against the integral of pdf() over each bin (a fine grid of directions per
 // bin). Seen from outside, the cone around the direction to the volume holds all the mass.
-void checkDirectionPdf(const EmissionLight& light, const Vec3& x, const Vec3& axis, float cosMin, uint64_t seed) {
+void checkDirectionPdf(const std::function<bool(Rng&, Vec3&)>& sample, const std::function<float(const Vec3&)>& pdf, const Vec3& axis,
+                       float cosMin, uint64_t seed) {
   constexpr int kCos = 40, kPhi = 40, kSamples = 300000, kSub = 8;
   Vec3 tx, ty;
   orthonormalBasis(axis, tx, ty);
@@ -32,7 +35,7 @@ void checkDirectionPdf(const EmissionLight& light, const Vec3& x, const Vec3& ax
   int drawn = 0;
   for (int i = 0; i < kSamples; ++i) {
     Vec3 w;
-    if (!light.sample(x, rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform(), w)) continue;
+    if (!sample(rng, w)) continue;
     ++drawn;
     const float wz = glm::dot(w, axis);
     ASSERT_GE(wz, cosMin) << "a sampled direction outside the cone that bounds the volume";
@@ -54,7 +57,7 @@ void checkDirectionPdf(const EmissionLight& light, const Vec3& x, const Vec3& ax
           const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
           const Vec3 w = glm::normalize(static_cast<float>(r * std::cos(phi)) * tx + static_cast<float>(r * std::sin(phi)) * ty +
                                         static_cast<float>(z) * axis);
-          const double p = light.pdf(x, w) * dOmega;
+          const double p = pdf(w) * dOmega;
           expected[ci * kPhi + pi] += p;
           total += p;
         }
@@ -81,6 +84,11 @@ void checkDirectionPdf(const EmissionLight& light, const Vec3& x, const Vec3& ax
   EXPECT_LT(chi2, test::chiSquareCritical(dof, 1e-4) + slack) << "dof " << dof;
 }
 
+void checkDirectionPdf(const EmissionLight& light, const Vec3& x, const Vec3& axis, float cosMin, uint64_t seed) {
+  checkDirectionPdf([&](Rng& rng, Vec3& w) { return light.sample(x, rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform(), w); },
+                    [&](const Vec3& w) { return light.pdf(x, w); }, axis, cosMin, seed);
+}
+
 TEST(EmissionLight, DirectionPdfMatchesSamplesFromOutside) {
   auto scene = torchOnly();
   ASSERT_EQ(scene->volumeLights().size(), 1u);
@@ -96,6 +104,29 @@ TEST(EmissionLight, DirectionPdfMatchesSamplesFromOutside) {
 TEST(EmissionLight, DirectionPdfMatchesSamplesFromInside) {
   auto scene = torchOnly({"strategy.emission.grid_cell_size=8"});
   checkDirectionPdf(*scene->volumeLights()[0], Vec3(0.0f, 1.2f, 0.0f), Vec3(0.0f, 0.0f, 1.0f), -1.0f, 2);
+}
+
+// Continuations toward emissive volumes (docs/method.md s.3b) draw from the volumes' densities mixed
+// by the light sampler's pmf at x: with two flames and a sky, the mixture's pdf matches its samples.
+TEST(EmissionLight, ContinuationTowardVolumesPdfMatchesSamples) {
+  SceneDesc desc = test::loadScene("assets/scenes/torch-in-mist.json", {"strategy.preset=\"emission\""});
+  desc.volumes.resize(1);
+  desc.volumes.push_back(desc.volumes[0]);
+  desc.volumes[1].name = "second flame";
+  desc.volumes[1].transform.translate = Vec3(0.5f, 1.0f, 0.2f);
+  auto scene = Scene::build(desc);
+  ASSERT_EQ(scene->volumeLights().size(), 2u);
+  const PathTracer tracer(*scene);
+  const Vec3 x(0.0f, 1.2f, 0.0f);  // inside the first flame's bounds: every direction is possible
+  float volumeShare = 0.0f;
+  const float share = tracer.continuationShareTowardVolumes(x, volumeShare);
+  ASSERT_GT(share, 0.0f);
+  ASSERT_GT(volumeShare, 0.0f);
+  ASSERT_LT(volumeShare, 1.0f) << "the sky keeps a share of the light samples";
+  const int first = static_cast<int>(scene->lights().size());
+  ASSERT_GT(scene->lightSampler().pmf(x, first + 1), 0.05f) << "both flames must matter";
+  checkDirectionPdf([&](Rng& rng, Vec3& w) { return tracer.sampleVolumeDirection(x, volumeShare, rng, w); },
+                    [&](const Vec3& w) { return tracer.volumeDirectionPdf(x, w, volumeShare); }, Vec3(0.0f, 0.0f, 1.0f), -1.0f, 3);
 }
 
 TEST(EmissionLight, CellProbabilitiesSumToOneAndFollowEnergy) {
