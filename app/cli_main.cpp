@@ -90,10 +90,10 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   if (!quiet) {
     const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
     std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples, "
-                "relative variance per sample %.4g, work per sample %.4g\n",
+                "relative variance per sample %.4g, variance per sample %.4g, work per sample %.4g\n",
                 scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
                 paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()), relativeVariancePerSample(film),
-                renderer.work().cost() / std::max(1.0, static_cast<double>(renderer.work().samples)));
+                variancePerSample(film), renderer.work().cost() / std::max(1.0, static_cast<double>(renderer.work().samples)));
     std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
   }
   if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) std::fprintf(stderr, "warning: %s: %s\n", scenePath.c_str(), w.c_str());

@@ -106,6 +106,19 @@ double relativeVariancePerSample(const Film& film) {
   return regions.empty() ? 0.0 : total / static_cast<double>(regions.size());
 }
 
+double variancePerSample(const Film& film) {
+  const int n = film.spp();
+  if (n < 2) return 0.0;
+  const std::vector<float>& sum = film.sum();
+  const std::vector<float>& sumSq = film.sumSquares();
+  double total = 0.0;
+  for (size_t i = 0; i < sum.size(); ++i) {
+    const double m = static_cast<double>(sum[i]) / n;
+    total += std::max(0.0, (static_cast<double>(sumSq[i]) / n - m * m) * n / (n - 1.0));
+  }
+  return sum.empty() ? 0.0 : total / static_cast<double>(sum.size());
+}
+
 ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference) {
   ErrorMetrics e;
   if (image.size() != reference.size() || image.empty()) return {NAN, NAN};

@@ -30,6 +30,9 @@ std::vector<double> regionalRelativeVariance(const Film& film, int regionSize, i
 // Its mean over 8 x 8-pixel regions: about the relMSE one sample per pixel would have (relMSE x spp
 // of a converged render). 0 below 2 spp.
 double relativeVariancePerSample(const Film& film);
+// The mean over pixels and channels of one sample's variance: the MSE one sample per pixel would
+// have (MSE x spp of a converged render), the absolute counterpart of the figure above. 0 below 2 spp.
+double variancePerSample(const Film& film);
 // An error map for display: per pixel, averaged over channels, |I - R| / mean(R) (absolute) or
 // |I - R| / sqrt(R^2 + eps) with the relMSE's eps (relative), in false colour on a log scale from
 // 0.01 (black) through blue, green, yellow, red to 10 (white). Interleaved RGB in [0, 1].
