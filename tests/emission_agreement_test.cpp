@@ -5,7 +5,8 @@
 // Power (checked by injecting biases into integrator.cpp): a 2% bias in gathered emission fails the
 // glow-box and closed-form slab tests; a 10% bias in the volume-NEE term alone (about 3% of the
 // pixels it lights) fails glow-box, a large emitter lighting a scattering volume and a floor where
-// conventional tracking is well-behaved. On fire and torch-in-mist conventional's estimate of
+// conventional tracking is well-behaved. A 10% bias in the weight of upward continuations toward
+// emissive volumes (docs/method.md s.3b) fails glow-box (per-unit-length) and torch-in-mist. On fire and torch-in-mist conventional's estimate of
 // a small bright flame is heavy-tailed, so those tests only catch gross (~10%+) biases at CI budgets.
 #include "blackbody.h"
 #include "stats.h"
