@@ -44,22 +44,34 @@ void Viewer::drawPaneLabels() {
     const float x = wipe ? (i == 0 ? r.x : r.x + r.w * 0.5f) : r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
     char line[256];
     std::snprintf(line, sizeof(line), "%s  %d spp  %.2f s", p.label.c_str(), p.film ? p.film->spp() : 0, p.seconds);
-    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + r.w / n, r.y + 40), IM_COL32(0, 0, 0, 150));
-    if (wipe && i == 1) draw->AddText(ImVec2(x + r.w / n - 60, r.y + 3), paneColor(i), "(right)");
-    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, r.y + 3), paneColor(i), line);
-    std::string second;
+    const float paneWidth = wipe ? r.w * 0.5f : r.w / static_cast<float>(n);
+    std::string figures, agreement;
     if (!p.series.empty()) {
       char e[96];
       std::snprintf(e, sizeof(e), "relMSE %.3g  eff %.3g  ", p.series.back().relmse, p.efficiency());
-      second = e;
+      figures = e;
     }
     ImU32 agreeColor = IM_COL32(170, 170, 170, 255);
-    if (!p.agreementTested && n > 1) second += "agreement from " + std::to_string(kAgreementMinSpp) + " spp";
+    if (!p.agreementTested && n > 1) agreement = "agreement from " + std::to_string(kAgreementMinSpp) + " spp";
     if (p.agreementTested) {
-      second += p.agreement.agree ? "agrees" : "DISAGREES";
+      agreement = p.agreement.agree ? "agrees" : "DISAGREES";
       agreeColor = p.agreement.agree ? IM_COL32(130, 220, 130, 255) : IM_COL32(255, 80, 70, 255);
     }
-    draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, second.c_str());
+    // Narrow panes (four side by side) put the agreement on a line of its own rather than under
+    // the next pane's label; every line is clipped to its pane.
+    const bool oneLine = ImGui::CalcTextSize((figures + agreement).c_str()).x + 16.0f <= paneWidth;
+    const float height = oneLine || agreement.empty() || figures.empty() ? 40.0f : 58.0f;
+    draw->PushClipRect(ImVec2(x, r.y), ImVec2(x + paneWidth, r.y + height), true);
+    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + paneWidth, r.y + height), IM_COL32(0, 0, 0, 150));
+    if (wipe && i == 1) draw->AddText(ImVec2(x + paneWidth - 60, r.y + 3), paneColor(i), "(right)");
+    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, r.y + 3), paneColor(i), line);
+    if (oneLine) {
+      draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, (figures + agreement).c_str());
+    } else {
+      draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, figures.empty() ? agreement.c_str() : figures.c_str());
+      if (!figures.empty()) draw->AddText(ImVec2(x + 8, r.y + 40), agreeColor, agreement.c_str());
+    }
+    draw->PopClipRect();
     if (i > 0 && !wipe) draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(20, 20, 20, 255), 2.0f);
   }
 }
