@@ -286,6 +286,7 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
   if (towardVolumes > 0.0f) {
     st.prevVolumeLightPdf = volumeLightPdf(p, wi);
     const float mixture = (1.0f - towardVolumes) * pdf + towardVolumes * st.prevVolumeLightPdf / volumeShare;
+    if (!(mixture > 0.0f)) return false;  // both densities underflowed: no finite weight to give
     st.beta *= pdf / mixture;
     pdf = mixture;
   }
