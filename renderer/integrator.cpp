@@ -160,7 +160,7 @@ bool PathTracer::sampleVolumeDirection(const Vec3& x, float volumeShare, Rng& rn
 }
 
 Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis,
-                            Rng& rng) const {
+                            Rng& rng, float towardVolumes, float volumeShare) const {
   const LightSampler& sampler = scene_.lightSampler();
   if (sampler.empty()) return Rgb(0.0f);
   float pmf = 0.0f;
@@ -185,12 +185,11 @@ Rgb PathTracer::directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& 
   // The continuation this NEE competes with (MIS) is a mixture at medium vertices with continuations
   // toward emissive volumes (docs/method.md s.3b): its pdf, given the phase pdf and, when known, the
   // volume-light pdf of wi.
-  float volumeShare = 0.0f;
-  const float towardVolumes = (useMis && !onSurface) ? continuationShareTowardVolumes(p, volumeShare) : 0.0f;
+  const float share = useMis ? towardVolumes : 0.0f;
   auto continuationPdf = [&](const Vec3& wi, float phasePdf, float knownVolumeLightPdf) {
-    if (!(towardVolumes > 0.0f)) return phasePdf;
+    if (!(share > 0.0f)) return phasePdf;
     const float lightPdf = knownVolumeLightPdf >= 0.0f ? knownVolumeLightPdf : volumeLightPdf(p, wi);
-    return (1.0f - towardVolumes) * phasePdf + towardVolumes * lightPdf / volumeShare;
+    return (1.0f - share) * phasePdf + share * lightPdf / volumeShare;
   };
   if (static_cast<size_t>(index) >= lightCount) {
     // An emissive volume (talk 2.1, Algorithm 2): a direction from its energy grid, the emission
@@ -253,9 +252,14 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
   ++st.vertices;
   const bool last = st.vertices == s.render().max_depth;
   const Vec3 wo = -st.ray.direction;
+  // The continuation's mixture (docs/method.md s.3b), evaluated once for the vertex: the NEE's MIS
+  // weights and the continuation below both use it.
+  float volumeShare = 0.0f;
+  const float towardVolumes = continuationShareTowardVolumes(p, volumeShare);
   // A zero MIS weight (the guided technique owns all direct light: guiding.combination =
   // guided_only) skips the NEE's rays entirely.
-  if (directWeight > 0.0f) L += st.beta * directWeight * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng);
+  if (directWeight > 0.0f)
+    L += st.beta * directWeight * directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), !last, rng, towardVolumes, volumeShare);
   if (last) {
     // After the last vertex only volume emission that no light sampler covers is still missing.
     if (!s.hasEmissiveMedia() || !s.volumeLights().empty()) return false;
@@ -272,8 +276,6 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
   }
   // The continuation: HG sampling, or with continuation_toward_volumes a one-sample mixture of HG
   // and the emissive volumes' direction density, weighted by the mixture's pdf (docs/method.md s.3b).
-  float volumeShare = 0.0f;
-  const float towardVolumes = continuationShareTowardVolumes(p, volumeShare);
   float pdf;
   Vec3 wi;
   if (towardVolumes > 0.0f && rng.uniform() < towardVolumes) {

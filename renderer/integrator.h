@@ -115,7 +115,11 @@ class PathTracer {
   // MIS weight of the guided technique given r = p_tracked / p_guided.
   float guidedWeight(float r, float guidedProbability) const;
 
-  Rgb directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis, Rng& rng) const;
+  // Direct light at a vertex by one light sample. With useMis its weight is MIS against the vertex's
+  // continuation: BSDF or HG sampling, or at a medium vertex the mixture with share `towardVolumes`
+  // toward the emissive volumes (their light-sampler share `volumeShare`; scatterVertex computes both).
+  Rgb directLight(const Vec3& p, const Vec3& wo, float g, const Vec3& normal, const Rgb& albedo, bool useMis, Rng& rng,
+                  float towardVolumes = 0.0f, float volumeShare = 0.0f) const;
   float visibility(const Vec3& p, const Vec3& wi, float distance, int targetLight, Rng& rng) const;
 
   const Scene& scene_;

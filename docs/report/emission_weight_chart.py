@@ -19,9 +19,9 @@ out = [f"<svg xmlns='http://www.w3.org/2000/svg' width='{W}' height='{H}' font-f
        f"<rect width='{W}' height='{H}' fill='white'/>"]
 def x_of(k, x0):
     return x0 + pw * (math.log(k) - math.log(ks[0])) / (math.log(ks[-1]) - math.log(ks[0]))
-for panel, (title, index) in enumerate([('by relative variance (relMSE)', 0), ('by variance (MSE)', 1)]):
+for panel, (title, index) in enumerate([('relMSE', 0), ('MSE', 1)]):
     x0 = left + panel * (pw + gap)
-    out.append(f"<text x='{x0}' y='18'>efficiency {title}, per scene best = 1</text>")
+    out.append(f"<text x='{x0}' y='18'>{title} efficiency (each scene's best = 1)</text>")
     for i in range(5):
         v = i / 4
         y = top + ph * (1 - v)
