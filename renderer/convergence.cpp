@@ -58,6 +58,11 @@ void writeFile(const std::string& path, const std::string& text) {
   out << text;
 }
 
+// The unbiased variance of one sample from a film entry's sum and sum of squares over n >= 2 samples.
+double sampleVariance(float sum, float sumSquares, int n) {
+  const double m = static_cast<double>(sum) / n;
+  return std::max(0.0, (static_cast<double>(sumSquares) / n - m * m) * n / (n - 1.0));
+}
 }  // namespace
 
 const char* const kRelMseFormula =
@@ -86,9 +91,8 @@ std::vector<double> regionalRelativeVariance(const Film& film, int regionSize, i
         for (int y = ry; y < std::min(h, ry + size); ++y)
           for (int x = rx; x < std::min(w, rx + size); ++x, ++count) {
             const size_t i = 3 * (static_cast<size_t>(y) * w + x) + ch;
-            const double m = static_cast<double>(sum[i]) / n;
-            var += std::max(0.0, (static_cast<double>(sumSq[i]) / n - m * m) * n / (n - 1.0));
-            mean += m;
+            var += sampleVariance(sum[i], sumSq[i], n);
+            mean += static_cast<double>(sum[i]) / n;
           }
         mean /= count;
         relative += (var / count) / (mean * mean + eps);
@@ -112,10 +116,7 @@ double variancePerSample(const Film& film) {
   const std::vector<float>& sum = film.sum();
   const std::vector<float>& sumSq = film.sumSquares();
   double total = 0.0;
-  for (size_t i = 0; i < sum.size(); ++i) {
-    const double m = static_cast<double>(sum[i]) / n;
-    total += std::max(0.0, (static_cast<double>(sumSq[i]) / n - m * m) * n / (n - 1.0));
-  }
+  for (size_t i = 0; i < sum.size(); ++i) total += sampleVariance(sum[i], sumSq[i], n);
   return sum.empty() ? 0.0 : total / static_cast<double>(sum.size());
 }
 
