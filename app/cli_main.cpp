@@ -4,6 +4,7 @@
 //   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
 //                     [--sweep KEY=V1,V2,...]
 //   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
+#include "auto_strategy.h"
 #include "cli_checks.h"
 #include "convergence.h"
 #include "guide_inspector.h"
@@ -41,7 +42,14 @@ std::vector<std::string> splitList(const std::string& s) {
 
 // The scene document with a strategy preset (if any) and the --set edits applied, validated.
 SceneDesc sceneWith(const std::string& path, const std::string& preset, const std::vector<std::string>& sets) {
-  return loadSceneDesc(path, sets, preset);
+  SceneDesc desc = loadSceneDesc(path, sets, preset);
+  // An edited strategy is the user's, not auto's to decide (needsAutoResolve): it renders as edited,
+  // with no pilot, under the name auto. Say so, or a sweep over strategy.* reads like auto's figures.
+  if (desc.strategy.preset == "auto" && !needsAutoResolve(desc.strategy))
+    std::cerr << "warning: " << path << ": strategy \"auto\" with edited strategy fields (--set strategy.* or the scene's strategy "
+              << "block) renders those settings as they are, without auto's rules or pilot; edit a preset instead (e.g. --strategy "
+              << "emission)\n";
+  return desc;
 }
 
 std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
@@ -94,6 +102,13 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
                 scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
                 paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()), relativeVariancePerSample(film),
                 variancePerSample(film), renderer.work().cost() / std::max(1.0, static_cast<double>(renderer.work().samples)));
+    // Where the work went, per camera sample (CANDELA_VERBOSE): the counts work.h prices.
+    if (std::getenv("CANDELA_VERBOSE")) {
+      const WorkCounters& w = renderer.work();
+      const double n = std::max(1.0, static_cast<double>(w.samples));
+      std::printf("work per sample by kind: collisions %.2f, segments %.2f, rays %.2f, knots %.2f, guided %.3f, guides %.3f\n",
+                  w.collisions / n, w.segments / n, w.rays / n, w.knots / n, w.guided / n, w.guides / n);
+    }
     std::printf("wrote %s\n", std::filesystem::absolute(out).string().c_str());
   }
   if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) std::fprintf(stderr, "warning: %s: %s\n", scenePath.c_str(), w.c_str());
@@ -253,7 +268,8 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     for (const auto& v : sweepValues) {
       char* end = nullptr;
       std::strtod(v.c_str(), &end);
-      if (*end != '\0') throw InputError("--sweep: expected numeric values, got \"" + v + "\"");
+      if (*end != '\0' && v != "true" && v != "false")
+        throw InputError("--sweep: expected numeric values (or true, false), got \"" + v + "\"");
     }
   }
   const auto strategies = splitList(strategiesText);
@@ -331,7 +347,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
                   p.mse, p.relmse);
       std::fflush(stdout);
       if (budget == times.back() && !sweepKey.empty())
-        sweepPoints.push_back({strategy, std::stod(value), 1.0 / (p.relmse * p.seconds), note});
+        sweepPoints.push_back({strategy, value == "true" ? 1.0 : value == "false" ? 0.0 : std::stod(value), 1.0 / (p.relmse * p.seconds), note});
     }
   }
   const std::string csv = (std::filesystem::path(outDir) / "convergence.csv").string();
