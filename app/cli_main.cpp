@@ -253,6 +253,16 @@ int calibrate() {
   return 0;
 }
 
+// A --sweep value as the chart's x: a number, or a switch's false / true as 0 / 1.
+double sweepNumber(const std::string& v) {
+  if (v == "false") return 0.0;
+  if (v == "true") return 1.0;
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0') throw InputError("--sweep: expected numeric values (or true, false), got \"" + v + "\"");
+  return x;
+}
+
 int bench(const std::string& scenePath, const std::string& strategiesText, const std::string& timesText, const std::string& refPath,
           int refSpp, const std::string& refStrategy, const std::string& outDir, int threads, const std::vector<std::string>& sets,
           const std::string& sweep) {
@@ -265,12 +275,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     sweepKey = sweep.substr(0, eq);
     sweepValues = splitList(sweep.substr(eq + 1));
     if (sweepValues.empty()) throw InputError("--sweep: expected at least one value after '='");
-    for (const auto& v : sweepValues) {
-      char* end = nullptr;
-      std::strtod(v.c_str(), &end);
-      if (*end != '\0' && v != "true" && v != "false")
-        throw InputError("--sweep: expected numeric values (or true, false), got \"" + v + "\"");
-    }
+    for (const auto& v : sweepValues) sweepNumber(v);  // every value checked before any render
   }
   const auto strategies = splitList(strategiesText);
   std::vector<double> times;
@@ -347,7 +352,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
                   p.mse, p.relmse);
       std::fflush(stdout);
       if (budget == times.back() && !sweepKey.empty())
-        sweepPoints.push_back({strategy, value == "true" ? 1.0 : value == "false" ? 0.0 : std::stod(value), 1.0 / (p.relmse * p.seconds), note});
+        sweepPoints.push_back({strategy, sweepNumber(value), 1.0 / (p.relmse * p.seconds), note});
     }
   }
   const std::string csv = (std::filesystem::path(outDir) / "convergence.csv").string();
