@@ -13,12 +13,10 @@
 namespace candela {
 
 double WorkCounters::cost() const {
-  // Nanoseconds per operation on one core of the calibration machine (candela-cli calibrate: a
-  // least-squares fit of pass time against these counts over the report scenes and presets; worst
-  // relative error 18-20%, fitted 2026-12-01 on the 2-core development machine). Only ratios matter.
-  return 60.0 * static_cast<double>(samples) + 100.0 * static_cast<double>(collisions) + 32.0 * static_cast<double>(segments) +
-         77.0 * static_cast<double>(rays) + 145.0 * static_cast<double>(knots) + 170.0 * static_cast<double>(guided) +
-         18.0 * static_cast<double>(guides);
+  using C = WorkCost;
+  return C::kSample * static_cast<double>(samples) + C::kCollision * static_cast<double>(collisions) +
+         C::kSegment * static_cast<double>(segments) + C::kRay * static_cast<double>(rays) + C::kKnot * static_cast<double>(knots) +
+         C::kGuided * static_cast<double>(guided) + C::kGuide * static_cast<double>(guides);
 }
 
 std::string AutoDecision::summary() const {

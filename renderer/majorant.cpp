@@ -81,6 +81,35 @@ std::vector<float> footprintMaxima(const CoarseGrid& layout, const IndexBox& box
   return cells;
 }
 
+MajorantGrid MajorantGrid::coarsened(int factor) const {
+  if (empty() || factor <= 1) return *this;
+  MajorantGrid out;
+  out.layout_ = layout_;
+  const glm::ivec3 fine = layout_.res, coarse = (fine + factor - 1) / factor;
+  out.layout_.res = coarse;
+  // The same domain, so walks reach no further: res / ceil(res / factor) fine cells per coarse cell
+  // along each axis (factor of them when it divides res).
+  out.layout_.cellExtent = layout_.cellExtent * Vec3(fine) / Vec3(coarse);
+  // Coarse cell k spans fine cells k res / res' .. ceil((k + 1) res / res') - 1 (integers: no rounding).
+  auto span = [&](int axis, int k, int& lo, int& hi) {
+    lo = k * fine[axis] / coarse[axis];
+    hi = std::min(fine[axis] - 1, ((k + 1) * fine[axis] + coarse[axis] - 1) / coarse[axis] - 1);
+  };
+  out.cells_.assign(out.layout_.cellCount(), 0.0f);
+  for (int kz = 0; kz < coarse.z; ++kz)
+    for (int ky = 0; ky < coarse.y; ++ky)
+      for (int kx = 0; kx < coarse.x; ++kx) {
+        int x0, x1, y0, y1, z0, z1;
+        span(0, kx, x0, x1), span(1, ky, y0, y1), span(2, kz, z0, z1);
+        float m = 0.0f;
+        for (int z = z0; z <= z1; ++z)
+          for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) m = std::max(m, cells_[static_cast<size_t>(layout_.cellIndex(x, y, z))]);
+        out.cells_[static_cast<size_t>(out.layout_.cellIndex(kx, ky, kz))] = m;
+      }
+  return out;
+}
+
 MajorantDda::MajorantDda(const CoarseGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax) {
   if (grid.empty()) return;
   res_ = grid.res;

@@ -54,6 +54,10 @@ class MajorantGrid {
   float maxDensity(int index) const { return cells_[static_cast<size_t>(index)]; }
   const std::vector<float>& maxDensities() const { return cells_; }
   size_t cellCount() const { return cells_.size(); }
+  // The same domain in ceil(res / factor) cells along each axis, each holding the largest of the
+  // cells it overlaps: a majorant wherever this one is (where factor divides res, the very grid a
+  // build with factor x the cell size gives).
+  MajorantGrid coarsened(int factor) const;
 
  private:
   CoarseGrid layout_;

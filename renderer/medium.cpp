@@ -2,9 +2,41 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "work.h"
+
 #include <algorithm>
+#include <utility>
 
 namespace candela {
+
+namespace {
+
+// How many times cell_size a medium's majorant cells should be (1, 2, 4, ...): the factor with the
+// least expected work per unit length of a ray, by the work model (work.h). A ray crosses about 1.5
+// cell planes per cell length (the mean of |dx| + |dy| + |dz| over directions), each a DDA segment,
+// and meets the cell's majorant times its length in (null) collisions; the mean majorant over the
+// cells stands for the cells a ray crosses. Coarser cells trade segments for collisions, which only
+// pays in thin media: in a cloud, fine cells keep the null collisions few (measured: the cloud
+// scene's work rose 12% at 2x cells, which the model called 3% cheaper).
+int coarseningFactor(const MajorantGrid& fine, float cellSize, float collisionsPerUnitDensity) {
+  int best = 1;
+  double bestCost = kInfinity;
+  for (int factor = 1;; factor *= 2) {
+    const MajorantGrid grid = fine.coarsened(factor);
+    double mean = 0.0;
+    for (float m : grid.maxDensities()) mean += m;
+    mean /= static_cast<double>(std::max<size_t>(1, grid.cellCount()));
+    // Work per voxel length of ray.
+    const double cost = WorkCost::kSegment * 1.5 / (cellSize * factor) + WorkCost::kCollision * mean * collisionsPerUnitDensity;
+    // A coarser grid must save a tenth: the work model's fits are good to about 20%, and a cloud's
+    // dense core, where its walks end, holds more collisions than the mean says.
+    if (cost < 0.9 * bestCost) bestCost = cost, best = factor;
+    if (grid.cellCount() <= 1) break;
+  }
+  return best;
+}
+
+}  // namespace
 
 Mat4 transformMatrix(const TransformDesc& t) {
   Mat4 m = glm::translate(Mat4(1.0f), t.translate);
@@ -51,10 +83,22 @@ void Medium::worldBounds(Vec3& lo, Vec3& hi) const {
 void Medium::applyStrategy(const StrategySettings& strategy) {
   const MajorantPolicy& policy = strategy.majorant;
   const int cellSize = policy.structure == MajorantStructure::Grid ? policy.cell_size : 0;
-  if (majorant_.empty() || builtStructure_ != policy.structure || builtCellSize_ != cellSize) {
+  // Coarser cells for media that emit nothing: an emitter keeps the asked-for cells, which also
+  // shape its emission-aware majorant and emission maxima (the variance of the emission estimate).
+  const bool coarsen = policy.coarsen_thin && policy.structure == MajorantStructure::Grid && !emissive_;
+  if (majorant_.empty() || builtStructure_ != policy.structure || builtCellSize_ != cellSize || builtCoarsen_ != coarsen) {
     majorant_ = MajorantGrid(density_, policy.structure, policy.cell_size);
+    occupancy_ = MajorantGrid();
+    coarsening_ = 1;
+    if (coarsen) {
+      // Collisions per voxel length per unit of stored density.
+      const float perDensity = desc_.sigma_t_scale * policy.safety_factor * voxelSize_;
+      coarsening_ = coarseningFactor(majorant_, static_cast<float>(policy.cell_size), perDensity);
+      if (coarsening_ > 1) occupancy_ = std::exchange(majorant_, majorant_.coarsened(coarsening_));
+    }
     builtStructure_ = policy.structure;
     builtCellSize_ = cellSize;
+    builtCoarsen_ = coarsen;
     emissionMaxima_.clear();
     radianceScale_ = 0.0f;
   }

@@ -27,6 +27,11 @@ class Medium {
   const std::string& name() const { return desc_.name; }
   const VoxelGrid& densityGrid() const { return density_; }
   const MajorantGrid& majorantGrid() const { return majorant_; }
+  // The majorant cells are this many times strategy.majorant.cell_size (majorant.coarsen_thin).
+  int majorantCoarsening() const { return coarsening_; }
+  // The majorant at the asked-for cell size, coarsened or not: where the medium may be non-zero, as
+  // finely as the strategy asks (probe placement).
+  const MajorantGrid& occupancyGrid() const { return occupancy_.empty() ? majorant_ : occupancy_; }
   const Mat4& indexFromWorld() const { return indexFromWorld_; }
   const Mat4& worldFromIndex() const { return worldFromIndex_; }
   bool emissive() const { return emissive_; }
@@ -117,8 +122,11 @@ class Medium {
   Rgb albedo_{0.0f};
   float albedoAverage_ = 0.0f;
   MajorantGrid majorant_;
+  MajorantGrid occupancy_;  // the uncoarsened grid, only when majorant_ is coarsened
   MajorantStructure builtStructure_ = MajorantStructure::Grid;
   int builtCellSize_ = -1;
+  bool builtCoarsen_ = false;
+  int coarsening_ = 1;  // majorant cells are this many times strategy.majorant.cell_size
   std::vector<float> emissionMaxima_;  // per majorant cell: max of lum(source) over the footprint
   float radianceScale_ = 0.0f;
   std::unique_ptr<EmissionLight> emissionLight_;

@@ -20,8 +20,8 @@ namespace {
 bool mayScatterNear(const Scene& scene, const Vec3& p, float r) {
   static const Vec3 offsets[7] = {{0, 0, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   for (const auto& m : scene.mediaOwned()) {
-    if (!(m->albedoAverage() > 0.0f) || m->majorantGrid().empty()) continue;
-    const MajorantGrid& grid = m->majorantGrid();
+    if (!(m->albedoAverage() > 0.0f) || m->occupancyGrid().empty()) continue;
+    const MajorantGrid& grid = m->occupancyGrid();
     for (const Vec3& o : offsets) {
       const Vec3 idx = Vec3(m->indexFromWorld() * glm::vec4(p + o * r, 1.0f));
       const Vec3 c = (idx - grid.origin()) / grid.cellExtent();

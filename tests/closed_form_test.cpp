@@ -37,8 +37,9 @@ void estimateTransmittance(const Scene& scene, const Ray& ray, float distance, E
 
 const std::vector<std::string> kPolicies[] = {
     {"strategy.majorant.structure=\"global\""},
-    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=1"},
-    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=8"},
+    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=1", "strategy.majorant.coarsen_thin=false"},
+    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=8", "strategy.majorant.coarsen_thin=false"},
+    {"strategy.majorant.structure=\"grid\"", "strategy.majorant.cell_size=1", "strategy.majorant.coarsen_thin=true"},
     {"strategy.majorant.safety_factor=3.0"},
 };
 

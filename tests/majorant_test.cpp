@@ -1,7 +1,9 @@
 // Majorant grid and DDA (docs/method.md s.1): the DDA visits exactly the cells a brute-force slab test
 // finds, in order; no trilinear lookup ever exceeds its cell's majorant (randomised).
 #include "majorant.h"
+#include "medium.h"
 #include "procedural.h"
+#include "scene.h"
 #include "rng.h"
 #include "test_support.h"
 #include "vdb_io.h"
@@ -10,6 +12,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 
 namespace candela {
 namespace {
@@ -126,6 +129,59 @@ TEST(MajorantGrid, GlobalIsTheOneCellCaseAndBoundsTheGridMajorants) {
   for (float v : cells.maxDensities()) cellMax = std::max(cellMax, v);
   EXPECT_FLOAT_EQ(globalMax, cellMax);
   EXPECT_EQ(global.origin(), cells.origin());
+}
+
+// A coarsened grid keeps the domain (walks reach no further) and bounds every fine cell it covers;
+// where the factor divides the resolution it is the grid built with larger cells.
+TEST(MajorantGrid, CoarsenedKeepsTheDomainAndBoundsTheFineCells) {
+  const VoxelGrid grid = generatedGrid("cloud", 40, Vec3(1.0f, 0.6f, 0.8f));
+  const MajorantGrid fine(grid, MajorantStructure::Grid, 4);
+  Rng rng(3, 1);
+  for (int factor : {2, 3, 4, 16}) {
+    const MajorantGrid coarse = fine.coarsened(factor);
+    EXPECT_EQ(coarse.resolution(), (fine.resolution() + factor - 1) / factor);
+    EXPECT_EQ(coarse.origin(), fine.origin());
+    EXPECT_LT(glm::length(coarse.domainMax() - fine.domainMax()), 1e-4f) << factor;
+    auto cellAt = [](const MajorantGrid& g, const Vec3& p) {
+      const glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor((p - g.origin()) / g.cellExtent())), glm::ivec3(0), g.resolution() - 1);
+      return g.maxDensity(g.cellIndex(c.x, c.y, c.z));
+    };
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3 p = fine.origin() + (fine.domainMax() - fine.origin()) * Vec3(rng.uniform(), rng.uniform(), rng.uniform());
+      ASSERT_GE(cellAt(coarse, p), cellAt(fine, p)) << "factor " << factor << " at " << p.x << "," << p.y << "," << p.z;
+    }
+    if (glm::all(glm::equal(fine.resolution() % factor, glm::ivec3(0)))) {
+      const MajorantGrid built(grid, MajorantStructure::Grid, 4 * factor);
+      EXPECT_EQ(coarse.maxDensities(), built.maxDensities()) << factor;
+    }
+  }
+  const MajorantGrid global(grid, MajorantStructure::Global, 0);
+  EXPECT_EQ(fine.coarsened(1000).maxDensities(), global.maxDensities());
+}
+
+// majorant.coarsen_thin: thin media that emit nothing walk fewer, larger cells; a dense cloud and an
+// emitter keep the cells asked for.
+TEST(MajorantGrid, OnlyThinMediaThatEmitNothingGetCoarserCells) {
+  auto coarsening = [](const char* scene, const std::vector<std::string>& edits) {
+    std::vector<std::string> all = {"camera.resolution=[8,8]"};
+    all.insert(all.end(), edits.begin(), edits.end());
+    auto built = Scene::build(test::loadScene(std::string("assets/scenes/") + scene + ".json", all));
+    std::map<std::string, int> out;
+    for (const Medium* m : built->media().media) out[m->desc().name] = m->majorantCoarsening();
+    return out;
+  };
+  const auto torch = coarsening("torch-in-mist", {"strategy.majorant.cell_size=8"});
+  EXPECT_GT(torch.at("mist"), 1);   // optical depth about 0.6 across: a few large cells
+  EXPECT_EQ(torch.at("flame"), 1);  // an emitter: its cells shape the emission-aware majorant
+  EXPECT_EQ(coarsening("cloud", {}).at("cloud"), 1);
+  EXPECT_EQ(coarsening("torch-in-mist", {"strategy.majorant.coarsen_thin=false"}).at("mist"), 1);
+  // The walks' domain stays the asked-for grid's, and probes are placed by the asked-for cells.
+  auto built = Scene::build(test::loadScene("assets/scenes/torch-in-mist.json", {"camera.resolution=[8,8]"}));
+  for (const Medium* m : built->media().media) {
+    const MajorantGrid asked(m->densityGrid(), MajorantStructure::Grid, 8);
+    EXPECT_LT(glm::length(m->majorantGrid().domainMax() - asked.domainMax()), 1e-4f) << m->desc().name;
+    EXPECT_EQ(m->occupancyGrid().maxDensities(), asked.maxDensities()) << m->desc().name;
+  }
 }
 
 }  // namespace
