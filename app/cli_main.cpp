@@ -218,14 +218,17 @@ int calibrate() {
   double c[kTerms] = {};
   for (int round = 0; round < 5; ++round) {
     double a[kTerms][kTerms + 1] = {};
-    for (const Row& r : rows)
-      for (int i = 0; i < kTerms; ++i)
-        for (int j = 0; j < kTerms; ++j) {
-          if (!active[i] || !active[j]) continue;
-          const double wgt = 1.0 / (r.seconds * r.seconds);
-          a[i][j] += r.x[i] * r.x[j] * wgt;
-          if (j == 0) a[i][kTerms] += r.x[i] * r.seconds * wgt;
-        }
+    for (const Row& r : rows) {
+      const double wgt = 1.0 / (r.seconds * r.seconds);
+      for (int i = 0; i < kTerms; ++i) {
+        if (!active[i]) continue;
+        // The right-hand side whatever else is dropped (it was filled only with term 0 active, so
+        // dropping the per-sample term zeroed the whole fit).
+        a[i][kTerms] += r.x[i] * r.seconds * wgt;
+        for (int j = 0; j < kTerms; ++j)
+          if (active[j]) a[i][j] += r.x[i] * r.x[j] * wgt;
+      }
+    }
     for (int i = 0; i < kTerms; ++i)
       if (!active[i]) a[i][i] = 1.0, a[i][kTerms] = 0.0;
     for (int i = 0; i < kTerms; ++i) {  // Gauss-Jordan
