@@ -86,7 +86,9 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
   // Coarser cells for media that emit nothing: an emitter keeps the asked-for cells, which also
   // shape its emission-aware majorant and emission maxima (the variance of the emission estimate).
   const bool coarsen = policy.coarsen_thin && policy.structure == MajorantStructure::Grid && !emissive_;
-  if (majorant_.empty() || builtStructure_ != policy.structure || builtCellSize_ != cellSize || builtCoarsen_ != coarsen) {
+  // The coarsening weighs collisions, so a new safety factor decides it again.
+  if (majorant_.empty() || builtStructure_ != policy.structure || builtCellSize_ != cellSize || builtCoarsen_ != coarsen ||
+      (coarsen && builtSafetyFactor_ != policy.safety_factor)) {
     majorant_ = MajorantGrid(density_, policy.structure, policy.cell_size);
     occupancy_ = MajorantGrid();
     coarsening_ = 1;
@@ -99,6 +101,7 @@ void Medium::applyStrategy(const StrategySettings& strategy) {
     builtStructure_ = policy.structure;
     builtCellSize_ = cellSize;
     builtCoarsen_ = coarsen;
+    builtSafetyFactor_ = policy.safety_factor;
     emissionMaxima_.clear();
     radianceScale_ = 0.0f;
   }

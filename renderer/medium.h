@@ -126,6 +126,7 @@ class Medium {
   MajorantStructure builtStructure_ = MajorantStructure::Grid;
   int builtCellSize_ = -1;
   bool builtCoarsen_ = false;
+  float builtSafetyFactor_ = 1.0f;
   int coarsening_ = 1;  // majorant cells are this many times strategy.majorant.cell_size
   std::vector<float> emissionMaxima_;  // per majorant cell: max of lum(source) over the footprint
   float radianceScale_ = 0.0f;
