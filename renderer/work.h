@@ -10,7 +10,8 @@ namespace candela {
 
 // Nanoseconds per operation on one core of the calibration machine (candela-cli calibrate: a
 // least-squares fit of pass time against these counts over the report scenes and presets; worst
-// relative error 18-20%, fitted 2026-12-01 on the 2-core development machine). Only ratios matter.
+// relative error 18-20%, fitted 2026-12-01 on the 2-core development machine; 25% on the rows of
+// 2026-12-02, after coarser cells for thin media, where a refit reached 22%). Only ratios matter.
 struct WorkCost {
   static constexpr double kSample = 60.0, kCollision = 100.0, kSegment = 32.0, kRay = 77.0, kKnot = 145.0, kGuided = 170.0,
                           kGuide = 18.0;
