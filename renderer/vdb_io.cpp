@@ -55,7 +55,8 @@ class VdbStructureCheck {
       return "written by an OpenVDB older than 3.0 (file format " + std::to_string(version) + "); re-save it with a current OpenVDB";
     if (version > openvdb::OPENVDB_FILE_VERSION) return "file format " + std::to_string(version) + " is newer than this OpenVDB reads";
     char hasGridOffsets = 0;
-    if (!read(libraryMajor) || !read(libraryMinor) || !read(hasGridOffsets) || !skip(36)) return "truncated header";
+    if (!read(libraryMajor) || !read(libraryMinor) || !read(hasGridOffsets)) return "truncated header";
+    if (!uuid()) return "corrupt header (the file's UUID is not 36 hex digits and dashes)";
     if (const std::string e = metaMap("file metadata"); !e.empty()) return e;
     // Without offsets (a stream, not a file) OpenVDB reads whole grids before any can be checked.
     if (!hasGridOffsets) return "written as a stream without grid offsets; re-save it as a .vdb file";
@@ -98,6 +99,22 @@ class VdbStructureCheck {
   bool skip(uint64_t n) {
     if (remaining() < n) return false;
     in_.seekg(static_cast<std::streamoff>(n), std::ios::cur);
+    return static_cast<bool>(in_);
+  }
+  // OpenVDB reads the UUID with boost's formatted operator>>, which skips whitespace before and
+  // inside it: a stray tab or newline there shifts every later field by a byte from where this
+  // check reads them, and OpenVDB then sized a string by 3 GB of garbage (a fuzz finding). Files
+  // OpenVDB writes hold the canonical 8-4-4-4-12 form, so nothing else is accepted.
+  bool uuid() {
+    char text[36];
+    if (remaining() < sizeof(text)) return false;
+    in_.read(text, sizeof(text));
+    for (int i = 0; i < 36; ++i) {
+      const bool dash = i == 8 || i == 13 || i == 18 || i == 23;
+      const char c = text[i];
+      const bool hex = (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
+      if (dash ? c != '-' : !hex) return false;
+    }
     return static_cast<bool>(in_);
   }
   bool string(std::string& out) {
