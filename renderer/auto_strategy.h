@@ -4,9 +4,10 @@
 //    never builds emission structures), with the emission weight relative to each medium's emission
 //    scale; scattering (distance) sampling only when some volume scatters a light and enough camera
 //    rays are thin enough for it to help (a thick cloud never learns probes).
-// 2. A pilot: each remaining candidate renders a few samples per pixel of a small image; its variance
-//    (from the film's sums of squares, pooled per region) times its work (work.h: counted, never
-//    timed) ranks it, and the most efficient is kept. The same seed gives the same decision on any
+// 2. A pilot: the plain candidate and the guided camera vertex ("full") render a few samples per
+//    pixel of a small image; the refinements of guiding (deeper guiding, equiangular) follow only
+//    when full is ahead. Each one's variance (from the film's sums of squares, pooled per region)
+//    times its work (work.h: counted, never timed) ranks it, and the most efficient is kept. The same seed gives the same decision on any
 //    machine and thread count.
 // Every candidate is an unbiased strategy: the choice changes the noise, never the image.
 #pragma once

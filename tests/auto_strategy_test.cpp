@@ -71,6 +71,38 @@ TEST(AutoStrategy, TheSameSeedGivesTheSameDecisionOnAnyThreadCount) {
   EXPECT_NE(all.find("pilot"), std::string::npos) << all;
 }
 
+// Deeper guiding and equiangular refine the guided camera vertex: the pilot renders them only when
+// full was ahead of the plain candidate, and says so when it skips them.
+TEST(AutoStrategy, RefinementsOfGuidingArePilotedOnlyWhenFullIsAhead) {
+  for (const char* name : {"torch-in-mist", "god-rays-dark"}) {
+    const auto scene = Scene::build(test::loadScene(std::string("assets/scenes/") + name + ".json",
+                                                    {"strategy.preset=\"auto\"", "camera.resolution=[96,54]"}));
+    const AutoDecision* d = scene->autoDecision();
+    ASSERT_NE(d, nullptr);
+    ASSERT_GE(d->pilot.size(), 2u) << d->summary();
+    ASSERT_EQ(d->pilot[1].name, "full") << d->summary();
+    bool refined = false;
+    for (const auto& m : d->pilot) refined |= m.name == "equiangular" || m.name == "full, guided_segments 8";
+    const bool fullAhead = d->pilot[1].efficiency > d->pilot[0].efficiency;
+    EXPECT_EQ(refined, fullAhead) << name << ": " << d->summary();
+    EXPECT_EQ(mentions(*d, "not tried"), !fullAhead) << name << ": " << d->summary();
+  }
+}
+
+// The guided candidates weight absorption at every collision as the full preset does; the plain
+// candidate of a scene without emission stays the conventional (analog) walk.
+TEST(AutoStrategy, GuidedCandidatesGatherAtEveryCollision) {
+  const auto scene = Scene::build(test::loadScene("assets/scenes/god-rays-dark.json", {"camera.resolution=[32,18]"}));
+  std::vector<std::string> reasons;
+  const std::vector<AutoCandidate> candidates = autoCandidates(*scene, reasons);
+  ASSERT_GE(candidates.size(), 2u);
+  EXPECT_FALSE(candidates[0].strategy.emission.gather_every_collision);
+  for (size_t i = 1; i < candidates.size(); ++i) {
+    EXPECT_TRUE(candidates[i].strategy.emission.gather_every_collision) << candidates[i].name;
+    EXPECT_NE(candidates[i].strategy.guiding.guide, DistanceGuide::None) << candidates[i].name;
+  }
+}
+
 TEST(AutoStrategy, ChoosingAutoAgainRedecidesButTheSameDecisionDoesNot) {
   auto scene = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"auto\"", "camera.resolution=[48,48]"}));
   const StrategySettings decided = scene->strategy();
