@@ -60,8 +60,8 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
     std::printf("%s (%.2f s)\n", d->summary().c_str(), d->pilotSeconds);
     if (std::getenv("CANDELA_VERBOSE"))
       for (const auto& m : d->pilot)
-        std::printf("  pilot %-24s relative variance %.4g  work per sample %.0f  efficiency %.3f\n", m.name.c_str(), m.relativeVariance,
-                    m.workPerSample, m.efficiency);
+        std::printf("  pilot %-24s relative variance %.4g  variance %.4g  work per sample %.0f  score %.3f\n", m.name.c_str(),
+                    m.relativeVariance, m.absoluteVariance, m.workPerSample, m.efficiency);
   }
   if (auto probes = scene->probes())
     std::printf("probes: %zu learned of %d placed (spacing %.3g, radius %.3g) in %.2f s%s\n", probes->probes().size(), probes->placed(),

@@ -24,7 +24,7 @@ std::string AutoDecision::summary() const {
   for (size_t i = 0; i < reasons.size(); ++i) s += (i == 0 ? ": " : "; ") + reasons[i];
   if (!pilot.empty()) {
     s += "; pilot (" + std::to_string(pilotWidth) + "x" + std::to_string(pilotHeight) + ", " + std::to_string(pilotSpp) +
-         " spp) efficiency";
+         " spp) score";
     for (const auto& m : pilot) {
       char buf[96];
       std::snprintf(buf, sizeof(buf), " %s %.2f,", m.name.c_str(), m.efficiency);
@@ -160,10 +160,26 @@ AutoDecision decide(Scene& scene) {
   d.pilotWidth = small.resolution.first, d.pilotHeight = small.resolution.second, d.pilotSpp = 8;
   std::vector<std::vector<double>> regionVariance;  // per candidate, per 8 x 8-pixel region
   int regionsX = 0, regionsY = 0;
+  // Every pilot image's per-pixel moments. The mean of all their means is the one normaliser of the
+  // relative figure (candidates render the same image, so it is a reference they share, as the
+  // relMSE's reference is): a candidate's own noisy mean would normalise its bright outliers away.
+  std::vector<PixelMoments> images;  // parallel to d.pilot
+  std::vector<double> sharedSum;
+  int sharedCount = 0;
+  std::vector<float> sharedMean;
+  auto share = [&](const PixelMoments& pm) {
+    if (pm.mean.empty()) return;
+    if (sharedSum.empty()) sharedSum.assign(pm.mean.size(), 0.0);
+    for (size_t i = 0; i < pm.mean.size(); ++i) sharedSum[i] += pm.mean[i];
+    ++sharedCount;
+    sharedMean.resize(sharedSum.size());
+    for (size_t i = 0; i < sharedSum.size(); ++i) sharedMean[i] = static_cast<float>(sharedSum[i] / sharedCount);
+  };
   // Renders one candidate's pilot image and measures it; `regions` (for "full, by region") are
   // applied after its strategy; `seedOffset` gives an image independent of the others'. The
-  // per-region variances go to `regional`.
-  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, uint32_t seedOffset, std::vector<double>& regional) {
+  // per-region variances go to `regional`, the per-pixel moments to `moments`.
+  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, uint32_t seedOffset, std::vector<double>& regional,
+                     PixelMoments& moments) {
     const bool hadProbes = scene.probes() != nullptr;
     scene.setStrategy(c.strategy);
     if (map) scene.setGuidedRegions(*map);
@@ -175,21 +191,42 @@ AutoDecision decide(Scene& scene) {
     ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
-    // Variance per sample, pooled over 8 x 8-pixel regions (convergence.h), averaged over regions:
-    // the expected relMSE of one sample per pixel, ranked as the report's relMSE ranks.
+    // Variance per sample pooled over 8 x 8-pixel regions (convergence.h): the region map's figure.
     regional = regionalRelativeVariance(film, 8, regionsX, regionsY);
-    double total = 0.0;
-    for (double v : regional) total += v;
-    const size_t regions = regional.size();
+    moments = pixelMoments(film);
+    share(moments);
     AutoMeasurement m;
     m.name = c.name;
-    m.relativeVariance = total / static_cast<double>(std::max<size_t>(1, regions));
+    double total = 0.0;
+    for (float v : moments.variance) total += v;
+    m.absoluteVariance = total / static_cast<double>(std::max<size_t>(1, moments.variance.size()));
     const WorkCounters& work = renderer.work();
     m.workPerSample = work.cost() / std::max<double>(1.0, static_cast<double>(work.samples));
-    m.efficiency = 1.0 / std::max(1e-300, m.relativeVariance * m.workPerSample);
     d.pilotWork += work.cost();
     scene.setRender(render);
     return m;
+  };
+  // Scores measurements against each other: per metric (relMSE-like against the shared mean image,
+  // MSE-like) the efficiency 1 / (variance x work) relative to the best of them, and as the score the
+  // worse of the two. The report holds auto to the best preset by both metrics; where they disagree
+  // (fire: full ahead by relMSE; shed-fire: full ahead by MSE, emission by relMSE) the candidate
+  // that is nowhere far behind wins.
+  auto score = [&](std::vector<AutoMeasurement>& ms, const std::vector<const PixelMoments*>& moments) {
+    double bestRelative = 0.0, bestAbsolute = 0.0;
+    for (size_t i = 0; i < ms.size(); ++i) {
+      AutoMeasurement& m = ms[i];
+      m.relativeVariance = relativeVarianceAgainst(moments[i]->variance, sharedMean);
+      m.relativeEfficiency = 1.0 / std::max(1e-30, m.relativeVariance * m.workPerSample);
+      m.absoluteEfficiency = 1.0 / std::max(1e-30, m.absoluteVariance * m.workPerSample);
+      bestRelative = std::max(bestRelative, m.relativeEfficiency);
+      bestAbsolute = std::max(bestAbsolute, m.absoluteEfficiency);
+    }
+    for (AutoMeasurement& m : ms) m.efficiency = std::min(m.relativeEfficiency / bestRelative, m.absoluteEfficiency / bestAbsolute);
+  };
+  auto scorePilot = [&] {
+    std::vector<const PixelMoments*> ptrs;
+    for (const PixelMoments& pm : images) ptrs.push_back(&pm);
+    score(d.pilot, ptrs);
   };
   // First the plain candidate and the guided camera vertex ("full"). Deeper guiding and
   // equiangular sampling refine scattering sampling: they are rendered only when the guided camera
@@ -199,24 +236,26 @@ AutoDecision decide(Scene& scene) {
   for (size_t i = 0; i < candidates.size(); ++i)
     if (candidates[i].name == "full") fullIndex = i;
   std::vector<AutoCandidate> refinements;
+  images.reserve(candidates.size() + 1);
   for (size_t i = 0; i < candidates.size(); ++i) {
     if (i != 0 && i != fullIndex) {
       refinements.push_back(candidates[i]);
       continue;
     }
-    d.pilot.push_back(measure(candidates[i], nullptr, 0, regionVariance.emplace_back()));
+    d.pilot.push_back(measure(candidates[i], nullptr, 0, regionVariance.emplace_back(), images.emplace_back()));
   }
   candidates.erase(std::remove_if(candidates.begin() + 1, candidates.end(), [](const AutoCandidate& c) { return c.name != "full"; }),
                    candidates.end());
   fullIndex = candidates.size() > 1 ? 1 : candidates.size();
   if (fullIndex < candidates.size() && !refinements.empty()) {
+    scorePilot();
     if (d.pilot[fullIndex].efficiency > d.pilot[0].efficiency) {
       for (const AutoCandidate& c : refinements) {
         candidates.push_back(c);
-        d.pilot.push_back(measure(c, nullptr, 0, regionVariance.emplace_back()));
+        d.pilot.push_back(measure(c, nullptr, 0, regionVariance.emplace_back(), images.emplace_back()));
       }
     } else {
-      d.reasons.push_back("full behind " + candidates[0].name + " in the pilot: deeper guiding and equiangular not tried");
+      d.reasons.push_back("full behind " + candidates[0].name + " in the first round: deeper guiding and equiangular not tried");
     }
   }
   // "full, by region": per region, the guided vertex only where full's pilot variance x work beat
@@ -238,11 +277,12 @@ AutoDecision decide(Scene& scene) {
     // Only a genuine mix is a new candidate: all or nothing is "full" or the plain one.
     if (share > 0.0 && share < 1.0) {
       candidates.push_back({"full, by region", candidates[fullIndex].strategy});
-      d.pilot.push_back(measure(candidates.back(), &regions, 1, regionVariance.emplace_back()));
+      d.pilot.push_back(measure(candidates.back(), &regions, 1, regionVariance.emplace_back(), images.emplace_back()));
     }
   }
-  // The most efficient candidate, but a more elaborate one only when it beats the first (the plain
-  // one the rules chose) by kAutoMargin: the pilot's variance and the work model (17% worst error)
+  scorePilot();
+  // The best-scoring candidate, but a more elaborate one only when it beats the first (the plain
+  // one the rules chose) by kAutoMargin: the pilot's variances and the work model (25% worst error)
   // are estimates, and a near tie is not worth probes or deeper guiding.
   double best = 0.0;
   size_t chosen = 0;
@@ -257,27 +297,42 @@ AutoDecision decide(Scene& scene) {
     // heavy-tailed candidate's rare large samples only by luck; on torch-in-mist the pilot's ratio of
     // full to emission ranged from 0.5 to 1.8 over seeds). So the winner is measured again on images
     // of two fresh seeds, the plain candidate once more, and the winner is kept only if the fresh
-    // estimates still put it kAutoMargin ahead of the plain one's (both rounds pooled).
+    // estimates still score it kAutoMargin ahead of the plain one's (both rounds pooled).
     std::vector<double> unused;
     const GuidedRegions* map = candidates[chosen].name == "full, by region" ? &regions : nullptr;
-    AutoMeasurement fresh = measure(candidates[chosen], map, 2, unused);
-    const AutoMeasurement fresh2 = measure(candidates[chosen], map, 3, unused);
-    fresh.relativeVariance = 0.5 * (fresh.relativeVariance + fresh2.relativeVariance);
-    fresh.workPerSample = 0.5 * (fresh.workPerSample + fresh2.workPerSample);
-    const AutoMeasurement plainAgain = measure(candidates[0], nullptr, 2, unused);
-    const double plainVariance = 0.5 * (d.pilot[0].relativeVariance + plainAgain.relativeVariance);
-    const double plainWork = 0.5 * (d.pilot[0].workPerSample + plainAgain.workPerSample);
-    const double ratio = (plainVariance * plainWork) / std::max(1e-300, fresh.relativeVariance * fresh.workPerSample);
-    char why[200];
-    std::snprintf(why, sizeof(why), "%s measured again on fresh seeds: x%.2f %s", candidates[chosen].name.c_str(), ratio,
-                  candidates[0].name.c_str());
+    PixelMoments freshImage, freshImage2, plainImage;
+    const AutoMeasurement fresh = measure(candidates[chosen], map, 2, unused, freshImage);
+    const AutoMeasurement fresh2 = measure(candidates[chosen], map, 3, unused, freshImage2);
+    const AutoMeasurement plainAgain = measure(candidates[0], nullptr, 2, unused, plainImage);
+    // Pooled per candidate: the mean of its images' variances (against the shared mean) and work.
+    std::vector<AutoMeasurement> pair{fresh, fresh2, d.pilot[0], plainAgain};
+    score(pair, {&freshImage, &freshImage2, &images[0], &plainImage});
+    std::vector<AutoMeasurement> pooled(2);
+    for (int k = 0; k < 2; ++k) {
+      const AutoMeasurement &a = pair[2 * k], &b = pair[2 * k + 1];
+      pooled[k].absoluteVariance = 0.5 * (a.absoluteVariance + b.absoluteVariance);
+      pooled[k].relativeVariance = 0.5 * (a.relativeVariance + b.relativeVariance);
+      pooled[k].workPerSample = 0.5 * (a.workPerSample + b.workPerSample);
+    }
+    double bestRelative = 0.0, bestAbsolute = 0.0;
+    for (auto& m : pooled) {
+      m.relativeEfficiency = 1.0 / std::max(1e-30, m.relativeVariance * m.workPerSample);
+      m.absoluteEfficiency = 1.0 / std::max(1e-30, m.absoluteVariance * m.workPerSample);
+      bestRelative = std::max(bestRelative, m.relativeEfficiency);
+      bestAbsolute = std::max(bestAbsolute, m.absoluteEfficiency);
+    }
+    for (auto& m : pooled) m.efficiency = std::min(m.relativeEfficiency / bestRelative, m.absoluteEfficiency / bestAbsolute);
+    const double ratio = pooled[0].efficiency / std::max(1e-30, pooled[1].efficiency);
+    char why[240];
+    std::snprintf(why, sizeof(why), "%s measured again on fresh seeds: x%.2f %s (relMSE x%.2f, MSE x%.2f)", candidates[chosen].name.c_str(), ratio,
+                  candidates[0].name.c_str(), pooled[0].relativeEfficiency / pooled[1].relativeEfficiency,
+                  pooled[0].absoluteEfficiency / pooled[1].absoluteEfficiency);
     d.reasons.push_back(why);
     if (ratio < kAutoMargin) {
       chosen = 0;
       d.reasons.push_back("not " + margin + " ahead: " + candidates[0].name);
     }
   }
-  for (auto& m : d.pilot) m.efficiency /= best;
   d.chosen = candidates[chosen].name;
   scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);

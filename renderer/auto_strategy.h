@@ -6,8 +6,10 @@
 //    rays are thin enough for it to help (a thick cloud never learns probes).
 // 2. A pilot: the plain candidate and the guided camera vertex ("full") render a few samples per
 //    pixel of a small image; the refinements of guiding (deeper guiding, equiangular) follow only
-//    when full is ahead. Each one's variance (from the film's sums of squares, pooled per region)
-//    times its work (work.h: counted, never timed) ranks it, and the most efficient is kept. The same seed gives the same decision on any
+//    when full is ahead. Each one's variance per sample (the film's sums of squares), relative to a
+//    mean image all candidates share and absolute, times its work (work.h: counted, never timed)
+//    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
+//    highest is kept (the report holds auto to the best preset by relMSE and by MSE). The same seed gives the same decision on any
 //    machine and thread count.
 // Every candidate is an unbiased strategy: the choice changes the noise, never the image.
 #pragma once
@@ -29,9 +31,16 @@ struct AutoCandidate {
 
 struct AutoMeasurement {
   std::string name;
-  double relativeVariance = 0.0;  // per sample: pooled region variance / (region mean^2 + eps)
-  double workPerSample = 0.0;     // WorkCounters::cost() per camera sample
-  double efficiency = 0.0;        // 1 / (relativeVariance x workPerSample), relative to the best
+  // Per sample: the mean over pixels of variance / (shared mean^2 + eps), the shared mean being the
+  // mean of every pilot image (the relMSE one sample per pixel would have), and the mean variance
+  // (the MSE one sample per pixel would have).
+  double relativeVariance = 0.0;
+  double absoluteVariance = 0.0;
+  double workPerSample = 0.0;  // WorkCounters::cost() per camera sample
+  // 1 / (variance x workPerSample) by each figure, and the score that ranks the candidates: the
+  // worse of the two, each relative to the best candidate's.
+  double relativeEfficiency = 0.0, absoluteEfficiency = 0.0;
+  double efficiency = 0.0;
 };
 
 // Scattering sampling by image region (auto's per-region choice): the one-sample probability q of

@@ -120,6 +120,32 @@ double variancePerSample(const Film& film) {
   return sum.empty() ? 0.0 : total / static_cast<double>(sum.size());
 }
 
+PixelMoments pixelMoments(const Film& film) {
+  PixelMoments m;
+  const int n = film.spp();
+  if (n < 2) return m;
+  const std::vector<float>& sum = film.sum();
+  const std::vector<float>& sumSq = film.sumSquares();
+  m.mean.resize(sum.size());
+  m.variance.resize(sum.size());
+  for (size_t i = 0; i < sum.size(); ++i) {
+    m.mean[i] = sum[i] / static_cast<float>(n);
+    m.variance[i] = static_cast<float>(sampleVariance(sum[i], sumSq[i], n));
+  }
+  return m;
+}
+
+double relativeVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean) {
+  if (variance.empty() || variance.size() != mean.size()) return 0.0;
+  double meanOfMean = 0.0;
+  for (float v : mean) meanOfMean += v;
+  meanOfMean /= static_cast<double>(mean.size());
+  const double eps = (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+  double total = 0.0;
+  for (size_t i = 0; i < variance.size(); ++i) total += variance[i] / (static_cast<double>(mean[i]) * mean[i] + eps);
+  return total / static_cast<double>(variance.size());
+}
+
 ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference) {
   ErrorMetrics e;
   if (image.size() != reference.size() || image.empty()) return {NAN, NAN};

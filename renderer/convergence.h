@@ -33,6 +33,16 @@ double relativeVariancePerSample(const Film& film);
 // The mean over pixels and channels of one sample's variance: the MSE one sample per pixel would
 // have (MSE x spp of a converged render), the absolute counterpart of the figure above. 0 below 2 spp.
 double variancePerSample(const Film& film);
+// Per pixel and channel, interleaved as the film: the mean and one sample's variance (from 2 spp;
+// empty below). The auto strategy's pilot normalises several candidates' variances by one shared
+// mean image, as the relMSE normalises by one reference.
+struct PixelMoments {
+  std::vector<float> mean, variance;
+};
+PixelMoments pixelMoments(const Film& film);
+// The relMSE one sample per pixel would have if `mean` were the reference: the mean over pixels and
+// channels of variance / (mean^2 + eps), eps as the relMSE's.
+double relativeVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean);
 // An error map for display: per pixel, averaged over channels, |I - R| / mean(R) (absolute) or
 // |I - R| / sqrt(R^2 + eps) with the relMSE's eps (relative), in false colour on a log scale from
 // 0.01 (black) through blue, green, yellow, red to 10 (white). Interleaved RGB in [0, 1].

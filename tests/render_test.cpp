@@ -92,6 +92,27 @@ TEST(Film, RelativeVariancePerSampleIsTheOneSampleRelMse) {
   EXPECT_NEAR(relativeVariancePerSample(constant), 0.0, 1e-9);
 }
 
+// The pilot's per-pixel figures (convergence.h): moments from the film's sums, and the relative
+// variance against a mean image other than the film's own.
+TEST(Film, PixelMomentsAndRelativeVarianceAgainstASharedMean) {
+  Film film(2, 1);
+  film.addSample(0, 0, Rgb(0.0f));
+  film.addSample(0, 0, Rgb(2.0f));
+  film.addSample(1, 0, Rgb(4.0f));
+  film.addSample(1, 0, Rgb(4.0f));
+  film.setPassSpp(2);
+  const PixelMoments m = pixelMoments(film);
+  ASSERT_EQ(m.mean.size(), 6u);
+  EXPECT_FLOAT_EQ(m.mean[0], 1.0f);
+  EXPECT_FLOAT_EQ(m.variance[0], 2.0f);  // unbiased: ((0 - 1)^2 + (2 - 1)^2) / (2 - 1)
+  EXPECT_FLOAT_EQ(m.mean[3], 4.0f);
+  EXPECT_FLOAT_EQ(m.variance[3], 0.0f);
+  // Against a shared mean of 2 everywhere: eps = (0.1 x 2)^2; pixel 0 gives 2 / 4.04, pixel 1 gives 0.
+  const std::vector<float> shared(6, 2.0f);
+  EXPECT_NEAR(relativeVarianceAgainst(m.variance, shared), 0.5 * 2.0 / 4.04, 1e-6);
+  EXPECT_TRUE(pixelMoments(Film(2, 1)).mean.empty()) << "below 2 spp there is no variance";
+}
+
 TEST(Agreement, AcceptsIndependentRendersAndCatchesAThreePercentBias) {
   const SceneDesc a = test::loadScene("assets/scenes/test/furnace.json", {"render.seed=1"});
   const SceneDesc b = test::loadScene("assets/scenes/test/furnace.json", {"render.seed=2"});
