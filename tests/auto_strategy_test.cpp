@@ -35,7 +35,9 @@ TEST(AutoStrategy, ASceneWithoutEmissionBuildsNoEmissionStructures) {
   EXPECT_TRUE(mentions(*scene->autoDecision(), "no volume emits")) << scene->autoDecision()->summary();
   EXPECT_TRUE(scene->volumeLights().empty());
   EXPECT_FALSE(scene->strategy().majorant.emission_term);
-  EXPECT_FALSE(scene->strategy().emission.gather_every_collision);
+  // Weighting absorption at every collision builds nothing; it is the walk auto uses everywhere.
+  EXPECT_TRUE(scene->strategy().emission.gather_every_collision);
+  EXPECT_FALSE(scene->strategy().emission.light_sampling);
   EXPECT_EQ(scene->strategy().preset, "auto");
 }
 
@@ -89,17 +91,20 @@ TEST(AutoStrategy, RefinementsOfGuidingArePilotedOnlyWhenFullIsAhead) {
   }
 }
 
-// The guided candidates weight absorption at every collision as the full preset does; the plain
-// candidate of a scene without emission stays the conventional (analog) walk.
-TEST(AutoStrategy, GuidedCandidatesGatherAtEveryCollision) {
+// Every candidate, guided or not, weights absorption at every collision as the full preset does,
+// in a scene without emission too.
+TEST(AutoStrategy, EveryCandidateGathersAtEveryCollision) {
   const auto scene = Scene::build(test::loadScene("assets/scenes/god-rays-dark.json", {"camera.resolution=[32,18]"}));
   std::vector<std::string> reasons;
   const std::vector<AutoCandidate> candidates = autoCandidates(*scene, reasons);
   ASSERT_GE(candidates.size(), 2u);
-  EXPECT_FALSE(candidates[0].strategy.emission.gather_every_collision);
-  for (size_t i = 1; i < candidates.size(); ++i) {
+  EXPECT_EQ(candidates[0].strategy.guiding.guide, DistanceGuide::None);
+  EXPECT_FALSE(candidates[0].strategy.majorant.emission_term);
+  for (size_t i = 0; i < candidates.size(); ++i) {
     EXPECT_TRUE(candidates[i].strategy.emission.gather_every_collision) << candidates[i].name;
-    EXPECT_NE(candidates[i].strategy.guiding.guide, DistanceGuide::None) << candidates[i].name;
+    if (i > 0) {
+      EXPECT_NE(candidates[i].strategy.guiding.guide, DistanceGuide::None) << candidates[i].name;
+    }
   }
 }
 
