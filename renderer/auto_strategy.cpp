@@ -131,6 +131,19 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
 
 namespace {
 AutoDecision decide(Scene& scene);
+
+// Each measurement's efficiencies 1 / (variance x work) by the relative and the absolute figure,
+// and its score: the worse of the two, each relative to the best of `ms`.
+void scoreAgainstEachOther(std::vector<AutoMeasurement>& ms) {
+  double bestRelative = 0.0, bestAbsolute = 0.0;
+  for (AutoMeasurement& m : ms) {
+    m.relativeEfficiency = 1.0 / std::max(1e-30, m.relativeVariance * m.workPerSample);
+    m.absoluteEfficiency = 1.0 / std::max(1e-30, m.absoluteVariance * m.workPerSample);
+    bestRelative = std::max(bestRelative, m.relativeEfficiency);
+    bestAbsolute = std::max(bestAbsolute, m.absoluteEfficiency);
+  }
+  for (AutoMeasurement& m : ms) m.efficiency = std::min(m.relativeEfficiency / bestRelative, m.absoluteEfficiency / bestAbsolute);
+}
 }  // namespace
 
 AutoDecision resolveAutoStrategy(Scene& scene) {
@@ -212,16 +225,8 @@ AutoDecision decide(Scene& scene) {
   // (fire: full ahead by relMSE; shed-fire: full ahead by MSE, emission by relMSE) the candidate
   // that is nowhere far behind wins.
   auto score = [&](std::vector<AutoMeasurement>& ms, const std::vector<const PixelMoments*>& moments) {
-    double bestRelative = 0.0, bestAbsolute = 0.0;
-    for (size_t i = 0; i < ms.size(); ++i) {
-      AutoMeasurement& m = ms[i];
-      m.relativeVariance = relativeVarianceAgainst(moments[i]->variance, sharedMean);
-      m.relativeEfficiency = 1.0 / std::max(1e-30, m.relativeVariance * m.workPerSample);
-      m.absoluteEfficiency = 1.0 / std::max(1e-30, m.absoluteVariance * m.workPerSample);
-      bestRelative = std::max(bestRelative, m.relativeEfficiency);
-      bestAbsolute = std::max(bestAbsolute, m.absoluteEfficiency);
-    }
-    for (AutoMeasurement& m : ms) m.efficiency = std::min(m.relativeEfficiency / bestRelative, m.absoluteEfficiency / bestAbsolute);
+    for (size_t i = 0; i < ms.size(); ++i) ms[i].relativeVariance = relativeVarianceAgainst(moments[i]->variance, sharedMean);
+    scoreAgainstEachOther(ms);
   };
   auto scorePilot = [&] {
     std::vector<const PixelMoments*> ptrs;
@@ -314,14 +319,7 @@ AutoDecision decide(Scene& scene) {
       pooled[k].relativeVariance = 0.5 * (a.relativeVariance + b.relativeVariance);
       pooled[k].workPerSample = 0.5 * (a.workPerSample + b.workPerSample);
     }
-    double bestRelative = 0.0, bestAbsolute = 0.0;
-    for (auto& m : pooled) {
-      m.relativeEfficiency = 1.0 / std::max(1e-30, m.relativeVariance * m.workPerSample);
-      m.absoluteEfficiency = 1.0 / std::max(1e-30, m.absoluteVariance * m.workPerSample);
-      bestRelative = std::max(bestRelative, m.relativeEfficiency);
-      bestAbsolute = std::max(bestAbsolute, m.absoluteEfficiency);
-    }
-    for (auto& m : pooled) m.efficiency = std::min(m.relativeEfficiency / bestRelative, m.absoluteEfficiency / bestAbsolute);
+    scoreAgainstEachOther(pooled);
     const double ratio = pooled[0].efficiency / std::max(1e-30, pooled[1].efficiency);
     char why[240];
     std::snprintf(why, sizeof(why), "%s measured again on fresh seeds: x%.2f %s (relMSE x%.2f, MSE x%.2f)", candidates[chosen].name.c_str(), ratio,
