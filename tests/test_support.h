@@ -6,6 +6,7 @@
 #include "stats.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include <unistd.h>
@@ -17,9 +18,19 @@ namespace candela::test {
 
 inline std::string assetPath(const std::string& relative) { return std::string(CANDELA_SOURCE_DIR) + "/" + relative; }
 
-// An empty scratch directory for this test process: TMP/candela-test-PID/NAME.
+// An empty scratch directory for this test process: TMP/candela-test-PID/NAME. The process removes
+// TMP/candela-test-PID when it exits, unless CANDELA_KEEP_TEST_FILES is set (to look at what a
+// failing test wrote).
 inline std::filesystem::path scratchDirectory(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("candela-test-" + std::to_string(::getpid())) / name;
+  struct RemovedAtExit {
+    std::filesystem::path root;
+    ~RemovedAtExit() {
+      std::error_code ec;
+      if (!std::getenv("CANDELA_KEEP_TEST_FILES")) std::filesystem::remove_all(root, ec);
+    }
+  };
+  static const RemovedAtExit process{std::filesystem::temp_directory_path() / ("candela-test-" + std::to_string(::getpid()))};
+  const std::filesystem::path dir = process.root / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

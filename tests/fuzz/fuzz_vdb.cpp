@@ -14,8 +14,13 @@
 #include <string>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  // OpenVDB reads files only: one scratch file per process.
-  static const std::string path = "/tmp/candela-fuzz-vdb-" + std::to_string(::getpid()) + ".vdb";
+  // OpenVDB reads files only: one scratch file per process, removed when the process exits normally.
+  struct ScratchFile {
+    std::string path;
+    ~ScratchFile() { std::remove(path.c_str()); }
+  };
+  static const ScratchFile scratch{"/tmp/candela-fuzz-vdb-" + std::to_string(::getpid()) + ".vdb"};
+  const std::string& path = scratch.path;
   if (FILE* f = std::fopen(path.c_str(), "wb")) {
     std::fwrite(data, 1, size, f);
     std::fclose(f);
