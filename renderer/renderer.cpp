@@ -17,7 +17,8 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   const Camera& camera = cameraOverride ? *cameraOverride : scene_->camera();
   const int w = camera.width(), h = camera.height();
   if (film.width() != w || film.height() != h) film.resize(w, h);
-  Film pass(w, h);
+  Film& pass = pass_;
+  pass.resize(w, h);  // zero-fills, keeping the arrays' storage
   const int tilesX = (w + options_.tileSize - 1) / options_.tileSize;
   const int tilesY = (h + options_.tileSize - 1) / options_.tileSize;
   const int firstSample = film.spp();
