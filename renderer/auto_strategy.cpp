@@ -177,16 +177,13 @@ AutoDecision decide(Scene& scene) {
   // relative figure (candidates render the same image, so it is a reference they share, as the
   // relMSE's reference is): a candidate's own noisy mean would normalise its bright outliers away.
   std::vector<PixelMoments> images;  // parallel to d.pilot
-  std::vector<double> sharedSum;
+  std::vector<float> sharedMean;  // the running mean of every pilot image's mean
   int sharedCount = 0;
-  std::vector<float> sharedMean;
   auto share = [&](const PixelMoments& pm) {
     if (pm.mean.empty()) return;
-    if (sharedSum.empty()) sharedSum.assign(pm.mean.size(), 0.0);
-    for (size_t i = 0; i < pm.mean.size(); ++i) sharedSum[i] += pm.mean[i];
+    if (sharedMean.empty()) sharedMean.assign(pm.mean.size(), 0.0f);
     ++sharedCount;
-    sharedMean.resize(sharedSum.size());
-    for (size_t i = 0; i < sharedSum.size(); ++i) sharedMean[i] = static_cast<float>(sharedSum[i] / sharedCount);
+    for (size_t i = 0; i < pm.mean.size(); ++i) sharedMean[i] += (pm.mean[i] - sharedMean[i]) / static_cast<float>(sharedCount);
   };
   // Renders one candidate's pilot image and measures it; `regions` (for "full, by region") are
   // applied after its strategy; `seedOffset` gives an image independent of the others'. The
@@ -210,9 +207,7 @@ AutoDecision decide(Scene& scene) {
     share(moments);
     AutoMeasurement m;
     m.name = c.name;
-    double total = 0.0;
-    for (float v : moments.variance) total += v;
-    m.absoluteVariance = total / static_cast<double>(std::max<size_t>(1, moments.variance.size()));
+    m.absoluteVariance = variancePerSample(film);
     const WorkCounters& work = renderer.work();
     m.workPerSample = work.cost() / std::max<double>(1.0, static_cast<double>(work.samples));
     d.pilotWork += work.cost();
