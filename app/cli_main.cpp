@@ -249,14 +249,35 @@ int calibrate() {
     }
     if (!dropped) break;
   }
-  double worst = 0.0;
-  for (const Row& r : rows) {
-    double predicted = 0.0;
-    for (int i = 0; i < kTerms; ++i) predicted += c[i] * r.x[i];
-    worst = std::max(worst, std::abs(predicted / r.seconds - 1.0));
-  }
-  std::printf("ns per operation: samples %.1f, collisions %.1f, segments %.1f, rays %.1f, knots %.1f, guided %.1f, guides %.1f (worst relative error %.0f%%)\n",
-              1e9 * c[0], 1e9 * c[1], 1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], 1e9 * c[6], 100.0 * worst);
+  // Relative errors of a model over the rows: the worst and the rms, after the one scale factor
+  // that fits best (only the constants' ratios matter; the machine sets their scale).
+  auto errors = [&](const double* coefficients, double& worst, double& rms) {
+    double sxy = 0.0, sxx = 0.0;
+    for (const Row& r : rows) {
+      double predicted = 0.0;
+      for (int i = 0; i < kTerms; ++i) predicted += coefficients[i] * r.x[i];
+      sxy += predicted / r.seconds, sxx += (predicted / r.seconds) * (predicted / r.seconds);
+    }
+    const double scale = sxx > 0.0 ? sxy / sxx : 1.0;
+    worst = rms = 0.0;
+    for (const Row& r : rows) {
+      double predicted = 0.0;
+      for (int i = 0; i < kTerms; ++i) predicted += coefficients[i] * r.x[i];
+      const double e = scale * predicted / r.seconds - 1.0;
+      worst = std::max(worst, std::abs(e)), rms += e * e;
+    }
+    rms = std::sqrt(rms / static_cast<double>(std::max<size_t>(1, rows.size())));
+  };
+  double worst = 0.0, rms = 0.0;
+  errors(c, worst, rms);
+  std::printf("ns per operation: samples %.1f, collisions %.1f, segments %.1f, rays %.1f, knots %.1f, guided %.1f, guides %.1f (relative error rms %.0f%%, worst %.0f%%)\n",
+              1e9 * c[0], 1e9 * c[1], 1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], 1e9 * c[6], 100.0 * rms, 100.0 * worst);
+  // The constants the renderer ships (work.h), judged on the same rows: refit them when these
+  // errors are well above the fit's.
+  using C = WorkCost;
+  const double shipped[kTerms] = {C::kSample, C::kCollision, C::kSegment, C::kRay, C::kKnot, C::kGuided, C::kGuide};
+  errors(shipped, worst, rms);
+  std::printf("work.h's constants on these rows: relative error rms %.0f%%, worst %.0f%%\n", 100.0 * rms, 100.0 * worst);
   return 0;
 }
 
