@@ -13,8 +13,9 @@ namespace candela {
 // 2026-12-02 (medians of four fits on the 2-core development machine, whose constants agreed to
 // 10-15%): the fit of 2026-12-01, before coarser cells for thin media and the cheaper light sample,
 // put guided depth 8 at 3.6x full's cost on god-rays-dark where it measures 2.7x; over the rows of
-// two calibrate runs its rms relative error was 14-17%, these constants' 7-12% (calibrate prints both). The fit leaves a camera sample and a guide's preparation at no
-// cost of their own (their work is in the rays and segments they start). Only ratios matter.
+// two calibrate runs its rms relative error was 14-17%, these constants' 7-12% (calibrate prints
+// both). The fit leaves a camera sample and a guide's preparation no cost of their own (their work
+// is in the rays and segments they start). Only ratios matter.
 struct WorkCost {
   static constexpr double kSample = 0.0, kCollision = 72.0, kSegment = 52.0, kRay = 135.0, kKnot = 131.0, kGuided = 162.0,
                           kGuide = 0.0;
