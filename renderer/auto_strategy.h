@@ -9,8 +9,10 @@
 //    when full is ahead. Each one's variance per sample (the film's sums of squares), relative to a
 //    mean image all candidates share and absolute, times its work (work.h: counted, never timed)
 //    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
-//    highest is kept (the report holds auto to the best preset by relMSE and by MSE). The same seed gives the same decision on any
-//    machine and thread count.
+//    highest is kept (the report holds auto to the best preset by relMSE and by MSE) if it beats
+//    the standing candidate by kAutoMargin: the plain one, or full where volumes emit into thin
+//    scattering media (its gain there is in samples too rare for the pilot). The same seed gives the
+//    same decision on any machine and thread count.
 // Every candidate is an unbiased strategy: the choice changes the noise, never the image.
 #pragma once
 
@@ -27,6 +29,9 @@ class Scene;
 struct AutoCandidate {
   std::string name;  // "emission", "full", "full, guided_segments 8", ...
   StrategySettings strategy;
+  // The candidate the others must beat by kAutoMargin in the pilot (exactly one per list): the plain
+  // one, or `full` where volumes emit into thin scattering media (autoCandidates says why).
+  bool standing = false;
 };
 
 struct AutoMeasurement {

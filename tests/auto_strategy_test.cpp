@@ -91,6 +91,31 @@ TEST(AutoStrategy, RefinementsOfGuidingArePilotedOnlyWhenFullIsAhead) {
   }
 }
 
+// Exactly one candidate stands (the one the others must beat by the margin): full where volumes emit
+// into thin scattering media, the plain candidate elsewhere; and a decision that keeps the standing
+// candidate says so.
+TEST(AutoStrategy, FullStandsWhereVolumesEmitIntoThinMedia) {
+  for (const auto& [name, expected] : std::vector<std::pair<const char*, const char*>>{
+           {"torch-in-mist", "full"}, {"fire", "full"}, {"god-rays-dark", "conventional, gathering"}}) {
+    const auto scene = Scene::build(test::loadScene(std::string("assets/scenes/") + name + ".json", {"camera.resolution=[32,18]"}));
+    std::vector<std::string> reasons;
+    const std::vector<AutoCandidate> candidates = autoCandidates(*scene, reasons);
+    int standing = 0;
+    std::string standingName;
+    for (const AutoCandidate& c : candidates)
+      if (c.standing) ++standing, standingName = c.name;
+    EXPECT_EQ(standing, 1) << name;
+    EXPECT_EQ(standingName, expected) << name;
+  }
+  const auto scene = Scene::build(test::loadScene("assets/scenes/torch-in-mist.json", {"strategy.preset=\"auto\"", "camera.resolution=[96,54]"}));
+  const AutoDecision* d = scene->autoDecision();
+  ASSERT_NE(d, nullptr);
+  EXPECT_TRUE(mentions(*d, "full stands")) << d->summary();
+  if (d->chosen == "full") {
+    EXPECT_EQ(scene->strategy().guiding.guide, DistanceGuide::Probes) << d->summary();
+  }
+}
+
 // Every candidate, guided or not, weights absorption at every collision as the full preset does,
 // in a scene without emission too.
 TEST(AutoStrategy, EveryCandidateGathersAtEveryCollision) {
