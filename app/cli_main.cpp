@@ -252,21 +252,18 @@ int calibrate() {
   // Relative errors of a model over the rows: the worst and the rms, after the one scale factor
   // that fits best (only the constants' ratios matter; the machine sets their scale).
   auto errors = [&](const double* coefficients, double& worst, double& rms) {
+    std::vector<double> ratio;  // predicted / measured, per row
     double sxy = 0.0, sxx = 0.0;
     for (const Row& r : rows) {
       double predicted = 0.0;
       for (int i = 0; i < kTerms; ++i) predicted += coefficients[i] * r.x[i];
-      sxy += predicted / r.seconds, sxx += (predicted / r.seconds) * (predicted / r.seconds);
+      ratio.push_back(predicted / r.seconds);
+      sxy += ratio.back(), sxx += ratio.back() * ratio.back();
     }
-    const double scale = sxx > 0.0 ? sxy / sxx : 1.0;
+    const double scale = sxx > 0.0 ? sxy / sxx : 1.0;  // least squares of scale x ratio against 1
     worst = rms = 0.0;
-    for (const Row& r : rows) {
-      double predicted = 0.0;
-      for (int i = 0; i < kTerms; ++i) predicted += coefficients[i] * r.x[i];
-      const double e = scale * predicted / r.seconds - 1.0;
-      worst = std::max(worst, std::abs(e)), rms += e * e;
-    }
-    rms = std::sqrt(rms / static_cast<double>(std::max<size_t>(1, rows.size())));
+    for (double q : ratio) worst = std::max(worst, std::abs(scale * q - 1.0)), rms += (scale * q - 1.0) * (scale * q - 1.0);
+    rms = std::sqrt(rms / static_cast<double>(std::max<size_t>(1, ratio.size())));
   };
   double worst = 0.0, rms = 0.0;
   errors(c, worst, rms);
