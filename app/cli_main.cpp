@@ -262,7 +262,10 @@ int calibrate() {
     }
     const double scale = sxx > 0.0 ? sxy / sxx : 1.0;  // least squares of scale x ratio against 1
     worst = rms = 0.0;
-    for (double q : ratio) worst = std::max(worst, std::abs(scale * q - 1.0)), rms += (scale * q - 1.0) * (scale * q - 1.0);
+    for (double q : ratio) {
+      const double e = scale * q - 1.0;
+      worst = std::max(worst, std::abs(e)), rms += e * e;
+    }
     rms = std::sqrt(rms / static_cast<double>(std::max<size_t>(1, ratio.size())));
   };
   double worst = 0.0, rms = 0.0;

@@ -58,6 +58,9 @@ StrategySettings named(const char* preset) {
   return s;
 }
 
+// kAutoMargin as the decision lines print it: "20%".
+std::string marginPercent() { return std::to_string(static_cast<int>(std::lround(100.0 * (kAutoMargin - 1.0)))) + "%"; }
+
 // The share of camera rays (a 32 x 18 grid over the image) that cross a medium with a majorant
 // optical depth of at most `maxDepth`, among those that cross one at all.
 double thinRayShare(const Scene& scene, float maxDepth) {
@@ -130,8 +133,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     // metric on torch-in-fog and shed-fire (README, "The auto strategy").
     out.front().standing = false;
     out.back().standing = true;
-    reasons.push_back("volumes emit into thin media: full stands unless the pilot puts another candidate " +
-                      std::to_string(static_cast<int>(std::lround(100.0 * (kAutoMargin - 1.0)))) + "% ahead");
+    reasons.push_back("volumes emit into thin media: full stands unless the pilot puts another candidate " + marginPercent() + " ahead");
   }
   StrategySettings deep = full;
   deep.guiding.guided_segments = 8;
@@ -304,7 +306,7 @@ AutoDecision decide(Scene& scene) {
   size_t chosen = standing;
   for (size_t i = 0; i < d.pilot.size(); ++i)
     if (d.pilot[i].efficiency > best) best = d.pilot[i].efficiency, chosen = i;
-  const std::string margin = std::to_string(static_cast<int>(std::lround(100.0 * (kAutoMargin - 1.0)))) + "%";
+  const std::string margin = marginPercent();
   if (chosen != standing && best < kAutoMargin * d.pilot[standing].efficiency) {
     chosen = standing;
     d.reasons.push_back("no candidate beat " + candidates[standing].name + " by " + margin + " in the pilot");
