@@ -58,8 +58,8 @@ StrategySettings named(const char* preset) {
   return s;
 }
 
-// kAutoMargin as the decision lines print it: "20%".
-std::string marginPercent() { return std::to_string(static_cast<int>(std::lround(100.0 * (kAutoMargin - 1.0)))) + "%"; }
+// A margin as the decision lines print it: "20%" for kAutoMargin.
+std::string marginPercent(double margin = kAutoMargin) { return std::to_string(static_cast<int>(std::lround(100.0 * (margin - 1.0)))) + "%"; }
 
 // The share of camera rays (a 32 x 18 grid over the image) that cross a medium with a majorant
 // optical depth of at most `maxDepth`, among those that cross one at all.
@@ -313,12 +313,11 @@ AutoDecision decide(Scene& scene) {
   for (size_t i = 0; i < d.pilot.size(); ++i)
     if (d.pilot[i].efficiency > best) best = d.pilot[i].efficiency, chosen = i;
   const std::string margin = marginPercent();
-  const double pilotMargin = standing == 0 ? std::sqrt(kAutoMargin) : kAutoMargin;
+  const bool plainStands = standing == 0;  // autoCandidates puts the plain candidate first
+  const double pilotMargin = plainStands ? std::sqrt(kAutoMargin) : kAutoMargin;
   if (chosen != standing && best < pilotMargin * d.pilot[standing].efficiency) {
     chosen = standing;
-    char why[160];
-    std::snprintf(why, sizeof(why), "no candidate beat %s by %.0f%% in the pilot", candidates[standing].name.c_str(), 100.0 * (pilotMargin - 1.0));
-    d.reasons.push_back(why);
+    d.reasons.push_back("no candidate beat " + candidates[standing].name + " by " + marginPercent(pilotMargin) + " in the pilot");
   } else if (chosen != standing) {
     // The winner's curse: the best of several noisy estimates is an optimistic one (8 spp see a
     // heavy-tailed candidate's rare large samples only by luck; on torch-in-mist the pilot's ratio of
