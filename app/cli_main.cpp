@@ -75,7 +75,8 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   auto scene = buildScene(desc);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
   ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
-  Film film;
+  // auto's pilot samples, when it piloted this image itself, are the render's first samples.
+  Film film = continueFromPilot(*scene, desc.render.spp);
   const double t = renderer.renderBudget(film, desc.render.spp, desc.render.time_s, desc.render.time_s > 0 ? 1 : 4);
   Image image = film.image();  // with variance and spp layers in the EXR
   image.metadata["scene"] = scenePath;
@@ -364,7 +365,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     const double pilotWork = scene->autoDecision() ? scene->autoDecision()->pilotWork : 0.0;
     for (double budget : times) {
       ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
-      Film film;
+      Film film = continueFromPilot(*scene, 0);  // auto's pilot samples, where it kept them
       ConvergencePoint p;
       p.strategy = label;
       p.budgetSeconds = budget;

@@ -129,7 +129,7 @@ int runReport(bool quick, const std::string& dir, int threads) {
       const double pilot = scene->autoDecision() ? scene->autoDecision()->pilotSeconds - scene->autoDecision()->probeSeconds : 0.0;
       if (const AutoDecision* d = scene->autoDecision()) run.strategy = "auto (" + d->chosen + ")", run.note = d->summary();
       for (double budget : budgets) {
-        Film film;
+        Film film = continueFromPilot(*scene, 0);  // auto's pilot samples, where it kept them
         const double t = pilot + renderer.renderBudget(film, 1 << 24, std::max(0.01, budget - pilot), 1);
         const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
         points.push_back({run.strategy, budget, t, film.spp(), e.mse, e.relmse, film.rejectedSamples()});

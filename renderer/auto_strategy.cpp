@@ -23,8 +23,8 @@ std::string AutoDecision::summary() const {
   std::string s = "auto chose " + chosen;
   for (size_t i = 0; i < reasons.size(); ++i) s += (i == 0 ? ": " : "; ") + reasons[i];
   if (!pilot.empty()) {
-    s += "; pilot (" + std::to_string(pilotWidth) + "x" + std::to_string(pilotHeight) + ", " + std::to_string(pilotSpp) +
-         " spp) score";
+    s += "; pilot (" + std::to_string(pilotWidth) + "x" + std::to_string(pilotHeight) + ", " + std::to_string(pilotSpp) + " spp each" +
+         (pilotFilm ? ", " + std::to_string(pilotFilm->spp()) + " spp kept in the image" : std::string()) + ") score";
     for (const auto& m : pilot) {
       char buf[96];
       std::snprintf(buf, sizeof(buf), " %s %.2f,", m.name.c_str(), m.efficiency);
@@ -46,6 +46,16 @@ StrategySettings autoBaseStrategy() {
   StrategySettings s = strategyPreset("conventional");
   s.preset = "auto";
   return s;
+}
+
+namespace {
+std::string viewKey(const Scene& scene) { return toJson(scene.desc().camera).dump() + toJson(scene.render()).dump(); }
+}  // namespace
+
+Film continueFromPilot(const Scene& scene, int maxSpp) {
+  const AutoDecision* d = scene.autoDecision();
+  if (!d || !d->pilotFilm || d->pilotView != viewKey(scene) || (maxSpp > 0 && d->pilotFilm->spp() > maxSpp)) return Film();
+  return *d->pilotFilm;
 }
 
 bool needsAutoResolve(const StrategySettings& s) { return s.preset == "auto" && toJson(s) == toJson(autoBaseStrategy()); }
@@ -178,15 +188,32 @@ AutoDecision decide(Scene& scene) {
     scene.setStrategy(candidates[0].strategy);
     return d;
   }
-  // The pilot: a small image of the same view (about 128 x 72), 8 spp per candidate, same seed.
+  // The pilot renders about kPilotSamples camera samples per candidate image. An image of at most
+  // that many pixels is rendered as it is, at 2-8 spp, and every candidate's samples stay in it
+  // (d.pilotFilm): each pilot image draws its own range of sample indices, so the images are
+  // independent of each other and of the passes that follow, and each sample is an unbiased
+  // estimate of its pixel whichever candidate drew it (the choice depends on earlier samples only),
+  // so at a fixed spp the image's expectation is unchanged. A larger image is piloted on a copy of
+  // about 128 x 72 pixels at 8 spp whose samples are discarded: kept, they would cost the first image
+  // seconds in the viewer, and the pilot is a small share of a render that size needs.
   const CameraDesc full = scene.desc().camera;
-  CameraDesc small = full;
-  const double scale = std::min(1.0, std::sqrt(128.0 * 72.0 / (static_cast<double>(full.resolution.first) * full.resolution.second)));
-  small.resolution = {std::max(8, static_cast<int>(std::lround(full.resolution.first * scale))),
-                      std::max(8, static_cast<int>(std::lround(full.resolution.second * scale)))};
-  scene.setCamera(small);
-  d.pilotWidth = small.resolution.first, d.pilotHeight = small.resolution.second, d.pilotSpp = 8;
-  std::vector<std::vector<double>> regionVariance;  // per candidate, per 8 x 8-pixel region
+  const double pixels = static_cast<double>(full.resolution.first) * full.resolution.second;
+  CameraDesc pilotCamera = full;
+  d.pilotSpp = std::clamp(static_cast<int>(std::lround(kPilotSamples / pixels)), 2, 8);
+  const bool keep = pixels <= kPilotSamples;
+  if (!keep) {
+    const double scale = std::sqrt(kPilotSamples / 8.0 / pixels);
+    pilotCamera.resolution = {std::max(8, static_cast<int>(std::lround(full.resolution.first * scale))),
+                              std::max(8, static_cast<int>(std::lround(full.resolution.second * scale)))};
+    d.pilotSpp = 8;
+    scene.setCamera(pilotCamera);
+  }
+  d.pilotWidth = pilotCamera.resolution.first, d.pilotHeight = pilotCamera.resolution.second;
+  // About 16 regions across, as 8-pixel regions of the 128 x 72 copy are.
+  const int regionSize = std::max(8, pilotCamera.resolution.first / 16);
+  Film kept;
+  int nextSample = 0;  // the first sample index of the next pilot image
+  std::vector<std::vector<double>> regionVariance;  // per candidate, per region
   int regionsX = 0, regionsY = 0;
   // Every pilot image's per-pixel moments. The mean of all their means is the one normaliser of the
   // relative figure (candidates render the same image, so it is a reference they share, as the
@@ -200,24 +227,26 @@ AutoDecision decide(Scene& scene) {
     ++sharedCount;
     for (size_t i = 0; i < pm.mean.size(); ++i) sharedMean[i] += (pm.mean[i] - sharedMean[i]) / static_cast<float>(sharedCount);
   };
-  // Renders one candidate's pilot image and measures it; `regions` (for "full, by region") are
-  // applied after its strategy; `seedOffset` gives an image independent of the others'. The
-  // per-region variances go to `regional`, the per-pixel moments to `moments`.
-  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, uint32_t seedOffset, std::vector<double>& regional,
-                     PixelMoments& moments) {
+  // Renders one candidate's pilot image on the next range of sample indices (independent of every
+  // other pilot image) and measures it; `regions` (for "full, by region") are applied after its
+  // strategy. The per-region variances go to `regional`, the per-pixel moments to `moments`.
+  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, std::vector<double>& regional, PixelMoments& moments) {
     const bool hadProbes = scene.probes() != nullptr;
     scene.setStrategy(c.strategy);
     if (map) scene.setGuidedRegions(*map);
     if (!hadProbes && scene.probes()) d.probeSeconds += scene.probes()->learnSeconds();
-    const RenderSettings render = scene.render();
-    RenderSettings shifted = render;
-    shifted.seed += seedOffset;
-    scene.setRender(shifted);
-    ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
+    RenderOptions options{0, 16};
+    options.firstSample = nextSample;
+    nextSample += d.pilotSpp;
+    ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), options);
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
-    // Variance per sample pooled over 8 x 8-pixel regions (convergence.h): the region map's figure.
-    regional = regionalRelativeVariance(film, 8, regionsX, regionsY);
+    if (keep) {
+      if (kept.width() != film.width() || kept.height() != film.height()) kept.resize(film.width(), film.height());
+      kept.addPass(film);
+    }
+    // Variance per sample pooled over regions (convergence.h): the region map's figure.
+    regional = regionalRelativeVariance(film, regionSize, regionsX, regionsY);
     moments = pixelMoments(film);
     share(moments);
     AutoMeasurement m;
@@ -226,7 +255,6 @@ AutoDecision decide(Scene& scene) {
     const WorkCounters& work = renderer.work();
     m.workPerSample = work.cost() / std::max<double>(1.0, static_cast<double>(work.samples));
     d.pilotWork += work.cost();
-    scene.setRender(render);
     return m;
   };
   // Scores measurements against each other: per metric (relMSE-like against the shared mean image,
@@ -257,7 +285,7 @@ AutoDecision decide(Scene& scene) {
       refinements.push_back(candidates[i]);
       continue;
     }
-    d.pilot.push_back(measure(candidates[i], nullptr, 0, regionVariance.emplace_back(), images.emplace_back()));
+    d.pilot.push_back(measure(candidates[i], nullptr, regionVariance.emplace_back(), images.emplace_back()));
   }
   candidates.erase(std::remove_if(candidates.begin() + 1, candidates.end(), [](const AutoCandidate& c) { return c.name != "full"; }),
                    candidates.end());
@@ -267,7 +295,7 @@ AutoDecision decide(Scene& scene) {
     if (d.pilot[fullIndex].efficiency > d.pilot[0].efficiency) {
       for (const AutoCandidate& c : refinements) {
         candidates.push_back(c);
-        d.pilot.push_back(measure(c, nullptr, 0, regionVariance.emplace_back(), images.emplace_back()));
+        d.pilot.push_back(measure(c, nullptr, regionVariance.emplace_back(), images.emplace_back()));
       }
     } else {
       d.reasons.push_back("full behind " + candidates[0].name + " in the first round: deeper guiding and equiangular not tried");
@@ -275,7 +303,7 @@ AutoDecision decide(Scene& scene) {
   }
   // "full, by region": per region, the guided vertex only where full's pilot variance x work beat
   // the plain candidate's by kAutoMargin (regions differ: a fire beside god rays wants both). The
-  // map is then rendered and measured like any candidate, with another seed: measuring it on the
+  // map is then rendered and measured like any candidate, on samples of its own: measuring it on the
   // images that chose it would credit it with their luck (the best of two noisy estimates per
   // region).
   GuidedRegions regions;
@@ -292,7 +320,7 @@ AutoDecision decide(Scene& scene) {
     // Only a genuine mix is a new candidate: all or nothing is "full" or the plain one.
     if (share > 0.0 && share < 1.0) {
       candidates.push_back({"full, by region", candidates[fullIndex].strategy});
-      d.pilot.push_back(measure(candidates.back(), &regions, 1, regionVariance.emplace_back(), images.emplace_back()));
+      d.pilot.push_back(measure(candidates.back(), &regions, regionVariance.emplace_back(), images.emplace_back()));
     }
   }
   scorePilot();
@@ -322,14 +350,14 @@ AutoDecision decide(Scene& scene) {
     // The winner's curse: the best of several noisy estimates is an optimistic one (8 spp see a
     // heavy-tailed candidate's rare large samples only by luck; on torch-in-mist the pilot's ratio of
     // full to emission ranged from 0.5 to 1.8 over seeds). So the winner is measured again on images
-    // of two fresh seeds, the standing candidate once more, and the winner is kept only if the fresh
+    // of two fresh sample ranges, the standing candidate once more, and the winner is kept only if the fresh
     // estimates still score it kAutoMargin ahead of the standing one's (both rounds pooled).
     std::vector<double> unused;
     const GuidedRegions* map = candidates[chosen].name == "full, by region" ? &regions : nullptr;
     PixelMoments freshImage, freshImage2, standingImage;
-    const AutoMeasurement fresh = measure(candidates[chosen], map, 2, unused, freshImage);
-    const AutoMeasurement fresh2 = measure(candidates[chosen], map, 3, unused, freshImage2);
-    const AutoMeasurement standingAgain = measure(candidates[standing], nullptr, 2, unused, standingImage);
+    const AutoMeasurement fresh = measure(candidates[chosen], map, unused, freshImage);
+    const AutoMeasurement fresh2 = measure(candidates[chosen], map, unused, freshImage2);
+    const AutoMeasurement standingAgain = measure(candidates[standing], nullptr, unused, standingImage);
     // Pooled per candidate: the mean of its images' variances (against the shared mean) and work.
     std::vector<AutoMeasurement> pair{fresh, fresh2, d.pilot[standing], standingAgain};
     score(pair, {&freshImage, &freshImage2, &images[standing], &standingImage});
@@ -343,7 +371,7 @@ AutoDecision decide(Scene& scene) {
     scoreAgainstEachOther(pooled);
     const double ratio = pooled[0].efficiency / std::max(1e-30, pooled[1].efficiency);
     char why[240];
-    std::snprintf(why, sizeof(why), "%s measured again on fresh seeds: x%.2f %s (relMSE x%.2f, MSE x%.2f)", candidates[chosen].name.c_str(), ratio,
+    std::snprintf(why, sizeof(why), "%s measured again on fresh samples: x%.2f %s (relMSE x%.2f, MSE x%.2f)", candidates[chosen].name.c_str(), ratio,
                   candidates[standing].name.c_str(), pooled[0].relativeEfficiency / pooled[1].relativeEfficiency,
                   pooled[0].absoluteEfficiency / pooled[1].absoluteEfficiency);
     d.reasons.push_back(why);
@@ -353,7 +381,8 @@ AutoDecision decide(Scene& scene) {
     }
   }
   d.chosen = candidates[chosen].name;
-  scene.setCamera(full);
+  if (keep) d.pilotFilm = std::make_shared<const Film>(std::move(kept)), d.pilotView = viewKey(scene);
+  else scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);
   if (d.chosen == "full, by region") {
     char why[120];

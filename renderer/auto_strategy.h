@@ -13,18 +13,23 @@
 //    the standing candidate by kAutoMargin: the plain one, or full where volumes emit into thin
 //    scattering media (its gain there is in samples too rare for the pilot), on fresh seeds after
 //    leading the pilot (by sqrt(kAutoMargin) against the plain one, by kAutoMargin against full).
-//    The same seed gives the same decision on any machine and thread count.
+//    The same seed gives the same decision on any machine and thread count. An image small enough
+//    is piloted as it is, on sample indices of its own per candidate, and the pilot's samples stay
+//    in the image (AutoDecision::pilotFilm): the pilot then costs only the difference between the
+//    candidates it tried and the one it chose.
 // Every candidate is an unbiased strategy: the choice changes the noise, never the image.
 #pragma once
 
 #include "settings.h"
 
 #include <algorithm>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace candela {
 
+class Film;
 class Scene;
 
 struct AutoCandidate {
@@ -76,7 +81,12 @@ struct AutoDecision {
   // its scene, so bench and report charge auto only pilotSeconds - probeSeconds, as they charge no
   // preset its build.
   double probeSeconds = 0.0;
-  int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;
+  int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;  // pilotSpp: per candidate image
+  // Every pilot image's samples summed, when the pilot rendered the image itself (at most
+  // kPilotSamples pixels): sample indices 0 to pilotFilm->spp() - 1 of the scene's seed, to be
+  // continued from (continueFromPilot). Null when the pilot rendered a reduced copy.
+  std::shared_ptr<const Film> pilotFilm;
+  std::string pilotView;  // the camera and render settings pilotFilm was rendered with (JSON)
   // When the choice is "full, by region": where the camera rays take guided vertices.
   GuidedRegions regions;
   // One line: "auto chose emission: volumes emit; ...; pilot: emission 1.00, full 0.62".
@@ -87,6 +97,10 @@ struct AutoDecision {
 // value the per-sample sweep in README ("The auto strategy") puts within 3% (relMSE) and 9% (MSE) of the
 // best on fire, glow-box, torch-in-mist and torch-in-fog.
 inline constexpr float kAutoRelativeEmissionWeight = 10.0f;
+// Camera samples per candidate image in the pilot (128 x 72 x 8): an image of at most this many
+// pixels is piloted as it is, at 2-8 spp, and keeps the pilot's samples; a larger one is piloted on
+// a copy of about 128 x 72 pixels at 8 spp.
+inline constexpr double kPilotSamples = 128.0 * 72.0 * 8.0;
 // How much more efficient than the plain candidate an elaborate one must be in the pilot.
 inline constexpr double kAutoMargin = 1.2;
 
@@ -101,5 +115,11 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
 // Decides for `scene` (rules, then the pilot when more than one candidate remains), applies the
 // choice with scene.setStrategy (preset stays "auto") and returns what it decided.
 AutoDecision resolveAutoStrategy(Scene& scene);
+
+// The film a render of `scene` starts from: the pilot's samples when auto piloted the image itself,
+// the scene's camera still matches it and they do not exceed `maxSpp` (0: no limit, for a render to
+// time); an empty film otherwise. Each sample's expectation is the pixel's value whichever candidate
+// drew it and the renderer continues at the next sample index, so the image stays unbiased.
+Film continueFromPilot(const Scene& scene, int maxSpp);
 
 }  // namespace candela

@@ -21,7 +21,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   pass.resize(w, h);  // zero-fills, keeping the arrays' storage
   const int tilesX = (w + options_.tileSize - 1) / options_.tileSize;
   const int tilesY = (h + options_.tileSize - 1) / options_.tileSize;
-  const int firstSample = film.spp();
+  const int firstSample = options_.firstSample + film.spp();
   const uint64_t seed = scene_->render().seed;
   std::atomic<bool> cancelled{false};
   PathTracer tracer(*scene_);

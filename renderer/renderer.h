@@ -20,6 +20,10 @@ namespace candela {
 struct RenderOptions {
   int threads = 0;     // 0: all hardware threads
   int tileSize = 32;
+  // The sample index of a film's first sample: a film's n-th sample draws stream firstSample + n.
+  // Auto's pilot renders its candidates on disjoint index ranges, so that their images can join the
+  // final one (auto_strategy.h) as independent samples.
+  int firstSample = 0;
 };
 
 class ProgressiveRenderer {

@@ -201,6 +201,56 @@ TEST(AutoStrategy, ARegionMapSetsEachPixelsGuidedProbability) {
   EXPECT_EQ(cache.builds(), 2) << "the map is part of the cache key";
 }
 
+// An image no larger than the pilot's sample count is piloted as it is, and the pilot's samples
+// start the render: they are the scene seed's first sample indices, the render continues after them,
+// and they are used only for the view they were rendered for and only where they do not exceed the
+// spp asked for. A larger image is piloted on a reduced copy and starts empty.
+TEST(AutoStrategy, ThePilotsSamplesStartTheImageOfTheViewTheyWereRenderedFor) {
+  auto scene = Scene::build(test::loadScene("assets/scenes/god-rays-dark.json", {"strategy.preset=\"auto\"", "camera.resolution=[96,54]"}));
+  const AutoDecision* d = scene->autoDecision();
+  ASSERT_NE(d, nullptr);
+  ASSERT_NE(d->pilotFilm, nullptr) << d->summary();
+  EXPECT_EQ(d->pilotWidth, 96);
+  EXPECT_EQ(d->pilotSpp, 8);
+  const int images = static_cast<int>(d->pilot.size()) + (mentions(*d, "measured again") ? 3 : 0);
+  EXPECT_EQ(d->pilotFilm->spp(), images * d->pilotSpp) << d->summary();
+  EXPECT_NE(d->summary().find(std::to_string(d->pilotFilm->spp()) + " spp kept in the image"), std::string::npos) << d->summary();
+  const int kept = d->pilotFilm->spp();
+  EXPECT_EQ(continueFromPilot(*scene, 0).spp(), kept);
+  EXPECT_EQ(continueFromPilot(*scene, kept).spp(), kept);
+  EXPECT_EQ(continueFromPilot(*scene, kept - 1).spp(), 0) << "more samples than asked for";
+
+  // The render continues at sample index `kept`: the same as the pilot's sums plus a separate render
+  // of those indices.
+  Film continued = continueFromPilot(*scene, 0);
+  ProgressiveRenderer renderer(scene, RenderOptions{0, 16});
+  renderer.renderPass(continued, 2);
+  RenderOptions after{0, 16};
+  after.firstSample = kept;
+  ProgressiveRenderer separate(scene, after);
+  Film next;
+  separate.renderPass(next, 2);
+  Film expected = *d->pilotFilm;
+  expected.addPass(next);
+  ASSERT_EQ(continued.spp(), kept + 2);
+  EXPECT_EQ(continued.sum(), expected.sum());
+  Film fromZero;
+  ProgressiveRenderer(scene, RenderOptions{0, 16}).renderPass(fromZero, 2);
+  EXPECT_NE(fromZero.sum(), next.sum()) << "the continuation draws new sample indices";
+
+  CameraDesc moved = scene->desc().camera;
+  moved.position.x += 0.1f;
+  scene->setCamera(moved);
+  EXPECT_EQ(continueFromPilot(*scene, 0).spp(), 0) << "the pilot's samples belong to the view they were rendered for";
+
+  const auto large = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"auto\"", "camera.resolution=[400,240]"}));
+  ASSERT_NE(large->autoDecision(), nullptr);
+  EXPECT_EQ(large->autoDecision()->pilotFilm, nullptr) << large->autoDecision()->summary();
+  EXPECT_LT(large->autoDecision()->pilotWidth, 400);
+  EXPECT_EQ(continueFromPilot(*large, 0).spp(), 0);
+  EXPECT_EQ(large->camera().width(), 400) << "the camera is restored after a reduced pilot";
+}
+
 class AutoAgreement : public testing::TestWithParam<const char*> {};
 
 TEST_P(AutoAgreement, AgreesWithConventional) {
@@ -212,7 +262,7 @@ TEST_P(AutoAgreement, AgreesWithConventional) {
   autoSets.push_back("render.seed=77");
   const Film reference = test::render(test::loadScene(scene, conv), 4096);
   const SceneDesc autoDesc = test::loadScene(scene, autoSets);
-  const Film film = test::render(autoDesc, 1024);
+  const Film film = test::render(autoDesc, 1024);  // the pilot's samples (of every candidate) included
   const Agreement a = compareRenders(reference, film, 3, 2);
   EXPECT_TRUE(a.agree) << GetParam() << ": " << a.worst;
   EXPECT_EQ(film.rejectedSamples(), 0u);

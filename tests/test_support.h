@@ -52,7 +52,7 @@ inline double chiSquareCritical(int dof, double p) {
 inline Film render(const SceneDesc& desc, int spp, int threads = 0) {
   auto scene = Scene::build(desc);
   ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
-  Film film;
+  Film film = continueFromPilot(*scene, spp);  // auto's pilot samples start the image, as in the CLI
   renderer.renderBudget(film, spp, 0.0, std::min(spp, 16));
   return film;
 }

@@ -180,12 +180,21 @@ void RenderSession::workerLoop() {
   bool finishedPublished = false;
   double rate = 5e5;  // camera samples per second, measured; sizes the preview pass
 
+  std::shared_ptr<const Film> usedPilot;  // the auto pilot's film a restart last started from
   auto restart = [&] {
     film = Film();
     seconds = 0.0;
     passSpp = 1;
     needPreview = true;
     finishedPublished = false;
+    // A new auto decision that piloted this very view: its samples are the first ones (once; after
+    // any later edit the image starts afresh), and they make the preview pass unnecessary.
+    const AutoDecision* d = scene ? scene->autoDecision() : nullptr;
+    if (d && d->pilotFilm && d->pilotFilm != usedPilot) {
+      usedPilot = d->pilotFilm;
+      film = continueFromPilot(*scene, limits.spp);
+      needPreview = film.spp() == 0;
+    }
   };
   auto makeFrame = [&] {
     auto frame = std::make_shared<Frame>();
