@@ -1,5 +1,6 @@
 #include "comparison_session.h"
 
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 
@@ -99,6 +100,13 @@ void ComparisonSession::workerLoop() {
           PaneState s;
           s.label = spec.label;
           s.strategy = spec.strategy;
+          // auto's decision is charged to its pane's time, as bench and report charge it (not the
+          // probes' learning, which no fixed preset is charged either), and its kept pilot samples
+          // start the pane's image.
+          if (const AutoDecision* d = panes.back().scene->autoDecision()) {
+            s.seconds = std::max(0.0, d->pilotSeconds - d->probeSeconds);
+            panes.back().film = continueFromPilot(*panes.back().scene, 0);
+          }
           state->panes.push_back(s);
         }
         reference.clear();

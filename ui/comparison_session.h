@@ -43,7 +43,7 @@ struct PaneState {
   std::string label;
   StrategySettings strategy;
   std::shared_ptr<const Film> film;  // null until the first pass
-  double seconds = 0.0;              // render time this pane has had
+  double seconds = 0.0;              // render time this pane has had (auto's pilot included)
   double lastSlice = 0.0;            // duration of its latest pass (equal time holds to one slice)
   std::vector<ErrorSample> series;   // with a reference: one sample per pass
   Agreement agreement;               // against every other pane (agree only if all agree)
