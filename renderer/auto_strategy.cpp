@@ -211,7 +211,7 @@ AutoDecision decide(Scene& scene) {
   d.pilotWidth = pilotCamera.resolution.first, d.pilotHeight = pilotCamera.resolution.second;
   // About 16 regions across, as 8-pixel regions of the 128 x 72 copy are.
   const int regionSize = std::max(8, pilotCamera.resolution.first / 16);
-  Film kept;
+  Film kept = keep ? Film(full.resolution.first, full.resolution.second) : Film();  // every pilot image's samples
   int nextSample = 0;  // the first sample index of the next pilot image
   std::vector<std::vector<double>> regionVariance;  // per candidate, per region
   int regionsX = 0, regionsY = 0;
@@ -241,10 +241,7 @@ AutoDecision decide(Scene& scene) {
     ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), options);
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
-    if (keep) {
-      if (kept.width() != film.width() || kept.height() != film.height()) kept.resize(film.width(), film.height());
-      kept.addPass(film);
-    }
+    if (keep) kept.addPass(film);
     // Variance per sample pooled over regions (convergence.h): the region map's figure.
     regional = regionalRelativeVariance(film, regionSize, regionsX, regionsY);
     moments = pixelMoments(film);

@@ -11,7 +11,7 @@
 //    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
 //    highest is kept (the report holds auto to the best preset by relMSE and by MSE) if it beats
 //    the standing candidate by kAutoMargin: the plain one, or full where volumes emit into thin
-//    scattering media (its gain there is in samples too rare for the pilot), on fresh seeds after
+//    scattering media (its gain there is in samples too rare for the pilot), on fresh samples after
 //    leading the pilot (by sqrt(kAutoMargin) against the plain one, by kAutoMargin against full).
 //    The same seed gives the same decision on any machine and thread count. An image small enough
 //    is piloted as it is, on sample indices of its own per candidate, and the pilot's samples stay
