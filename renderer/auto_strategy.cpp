@@ -145,9 +145,14 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     out.back().standing = true;
     reasons.push_back("volumes emit into thin media: full stands unless the pilot puts another candidate " + marginPercent() + " ahead");
   }
-  StrategySettings deep = full;
-  deep.guiding.guided_segments = 8;
-  out.push_back({"full, guided_segments 8", deep});
+  // The guided vertex on one camera segment in two: where the probes' light is most of the image
+  // (god rays' shafts) it is x1.3-1.8 ahead of full by absolute variance per sample, behind where
+  // little light scatters. Mostly a level for the region map. Deeper guiding (guided_segments 8) is
+  // no candidate: per sample at 320x180 it cost 2.9x full's work on god-rays-dark for 1.3x less
+  // variance, 2.4x on shed-fire for 1.1x, and it never came within 0.3 of the best in a pilot.
+  StrategySettings often = full;
+  often.guiding.guided_probability = kAutoOftenGuidedProbability;
+  out.push_back({kAutoOftenGuidedName, often});
   StrategySettings equi = base;
   equi.guiding.guide = DistanceGuide::EquiAngular;
   out.push_back({"equiangular", equi});
@@ -213,8 +218,6 @@ AutoDecision decide(Scene& scene) {
   const int regionSize = std::max(8, pilotCamera.resolution.first / 16);
   Film kept = keep ? Film(full.resolution.first, full.resolution.second) : Film();  // every pilot image's samples
   int nextSample = 0;  // the first sample index of the next pilot image
-  std::vector<std::vector<double>> regionVariance;  // per candidate, per region
-  int regionsX = 0, regionsY = 0;
   // Every pilot image's per-pixel moments. The mean of all their means is the one normaliser of the
   // relative figure (candidates render the same image, so it is a reference they share, as the
   // relMSE's reference is): a candidate's own noisy mean would normalise its bright outliers away.
@@ -229,8 +232,8 @@ AutoDecision decide(Scene& scene) {
   };
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
   // other pilot image) and measures it; `regions` (for "full, by region") are applied after its
-  // strategy. The per-region variances go to `regional`, the per-pixel moments to `moments`.
-  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, std::vector<double>& regional, PixelMoments& moments) {
+  // strategy. The per-pixel moments go to `moments`.
+  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, PixelMoments& moments) {
     const bool hadProbes = scene.probes() != nullptr;
     scene.setStrategy(c.strategy);
     if (map) scene.setGuidedRegions(*map);
@@ -242,8 +245,6 @@ AutoDecision decide(Scene& scene) {
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
     if (keep) kept.addPass(film);
-    // Variance per sample pooled over regions (convergence.h): the region map's figure.
-    regional = regionalRelativeVariance(film, regionSize, regionsX, regionsY);
     moments = pixelMoments(film);
     share(moments);
     AutoMeasurement m;
@@ -268,56 +269,95 @@ AutoDecision decide(Scene& scene) {
     for (const PixelMoments& pm : images) ptrs.push_back(&pm);
     score(d.pilot, ptrs);
   };
-  // First the plain candidate and the guided camera vertex ("full"). Deeper guiding and
-  // equiangular sampling refine scattering sampling: they are rendered only when the guided camera
-  // vertex pays at all (full ahead of the plain candidate). Over the report scenes neither ever came
-  // within 10% of the best where full was behind, and skipping them halves the pilot there.
+  // The region map: per pilot region, the one-sample probability q of the guided camera vertex
+  // among the plain candidate's (0) and those of the measured guided candidates in `guided`, which
+  // differ from full only in q. Each region takes the q whose variance x work is least, the relative
+  // and the absolute variance (both against the shared mean, as the score's) each over the plain
+  // candidate's whole-image total and summed, as the score weighs both metrics; a guided q must
+  // beat the plain candidate by kAutoMargin. Work is each candidate's per sample over the whole image.
+  // (Choosing each region to maximise the map's predicted score instead fitted the pilot's noise:
+  // at 2 spp a plain region that drew no rare bright sample looks calm, and the maps it chose
+  // measured worse than full on fresh samples.)
+  auto regionMap = [&](const std::vector<size_t>& guided) {
+    const int width = pilotCamera.resolution.first, height = pilotCamera.resolution.second;
+    const RegionalVariance plain = regionalVarianceAgainst(images[0].variance, sharedMean, width, height, regionSize);
+    std::vector<RegionalVariance> levels;
+    for (size_t k : guided) levels.push_back(regionalVarianceAgainst(images[k].variance, sharedMean, width, height, regionSize));
+    double relativeTotal = 1e-30, absoluteTotal = 1e-30;
+    for (size_t r = 0; r < plain.relative.size(); ++r) relativeTotal += plain.relative[r], absoluteTotal += plain.absolute[r];
+    GuidedRegions map;
+    map.regionsX = plain.regionsX, map.regionsY = plain.regionsY;
+    for (size_t r = 0; r < plain.relative.size(); ++r) {
+      auto cost = [&](const RegionalVariance& v, double work) {
+        return (v.relative[r] / relativeTotal + v.absolute[r] / absoluteTotal) * work;
+      };
+      double least = cost(plain, d.pilot[0].workPerSample) / kAutoMargin;
+      float q = 0.0f;
+      for (size_t l = 0; l < guided.size(); ++l) {
+        const double c = cost(levels[l], d.pilot[guided[l]].workPerSample);
+        if (c < least) least = c, q = candidates[guided[l]].strategy.guiding.guided_probability;
+      }
+      map.probability.push_back(q);
+    }
+    return map;
+  };
+  // First the plain candidate and the guided camera vertex ("full"). The other guided candidates
+  // refine it, and are rendered only where it pays: the guided vertex in one segment in two when full
+  // was ahead of the plain candidate in the whole image or in some region, equiangular when it was
+  // ahead in the whole image. Over the report scenes equiangular never came within 10% of the best
+  // where full was behind, and skipping the refinements halves the pilot there.
   size_t fullIndex = candidates.size();
   for (size_t i = 0; i < candidates.size(); ++i)
     if (candidates[i].name == "full") fullIndex = i;
   std::vector<AutoCandidate> refinements;
-  images.reserve(candidates.size() + 1);
+  images.reserve(candidates.size() + 3);
   for (size_t i = 0; i < candidates.size(); ++i) {
     if (i != 0 && i != fullIndex) {
       refinements.push_back(candidates[i]);
       continue;
     }
-    d.pilot.push_back(measure(candidates[i], nullptr, regionVariance.emplace_back(), images.emplace_back()));
+    d.pilot.push_back(measure(candidates[i], nullptr, images.emplace_back()));
   }
   candidates.erase(std::remove_if(candidates.begin() + 1, candidates.end(), [](const AutoCandidate& c) { return c.name != "full"; }),
                    candidates.end());
   fullIndex = candidates.size() > 1 ? 1 : candidates.size();
-  if (fullIndex < candidates.size() && !refinements.empty()) {
+  std::vector<size_t> qLevels;  // the measured guided candidates that differ from full only in q
+  if (fullIndex < candidates.size()) {
+    qLevels.push_back(fullIndex);
     scorePilot();
-    if (d.pilot[fullIndex].efficiency > d.pilot[0].efficiency) {
-      for (const AutoCandidate& c : refinements) {
-        candidates.push_back(c);
-        d.pilot.push_back(measure(c, nullptr, regionVariance.emplace_back(), images.emplace_back()));
+    const bool fullAhead = d.pilot[fullIndex].efficiency > d.pilot[0].efficiency;
+    const bool fullAheadSomewhere = fullAhead || regionMap(qLevels).guidedShare() > 0.0;
+    std::vector<std::string> skipped;
+    for (const AutoCandidate& c : refinements) {
+      const bool often = c.name == kAutoOftenGuidedName;
+      if (!(often ? fullAheadSomewhere : fullAhead)) {
+        skipped.push_back(c.name);
+        continue;
       }
-    } else {
-      d.reasons.push_back("full behind " + candidates[0].name + " in the first round: deeper guiding and equiangular not tried");
+      if (often) qLevels.push_back(candidates.size());
+      candidates.push_back(c);
+      d.pilot.push_back(measure(c, nullptr, images.emplace_back()));
+    }
+    if (!skipped.empty()) {
+      std::string names;
+      for (const std::string& n : skipped) names += (names.empty() ? "" : " and ") + n;
+      d.reasons.push_back(std::string(fullAheadSomewhere ? "full behind " : "full behind in every region of ") + candidates[0].name +
+                          " in the first round: " + names + " not tried");
     }
   }
-  // "full, by region": per region, the guided vertex only where full's pilot variance x work beat
-  // the plain candidate's by kAutoMargin (regions differ: a fire beside god rays wants both). The
-  // map is then rendered and measured like any candidate, on samples of its own: measuring it on the
-  // images that chose it would credit it with their luck (the best of two noisy estimates per
-  // region).
+  // "full, by region": per region the q of the map above (regions differ: a fire beside god rays
+  // wants tracking alone, the shafts a guided vertex, the brightest shafts often). The map is then
+  // rendered and measured like any candidate, on samples of its own: measuring it on the images
+  // that chose it would credit it with their luck (the best of several noisy estimates per region).
   GuidedRegions regions;
   if (fullIndex < candidates.size()) {
-    const AutoMeasurement& plain = d.pilot[0];
-    const AutoMeasurement& guided = d.pilot[fullIndex];
-    regions.regionsX = regionsX, regions.regionsY = regionsY;
-    for (size_t r = 0; r < regionVariance[0].size(); ++r) {
-      const double vp = regionVariance[0][r], vg = regionVariance[fullIndex][r];
-      const bool guide = vg * guided.workPerSample * kAutoMargin < vp * plain.workPerSample;
-      regions.probability.push_back(guide ? candidates[fullIndex].strategy.guiding.guided_probability : 0.0f);
-    }
-    const double share = regions.guidedShare();
-    // Only a genuine mix is a new candidate: all or nothing is "full" or the plain one.
-    if (share > 0.0 && share < 1.0) {
+    regions = regionMap(qLevels);
+    std::vector<float> levels = regions.probability;
+    std::sort(levels.begin(), levels.end());
+    // Only a genuine mix is a new candidate: a single q everywhere is a candidate already measured.
+    if (std::unique(levels.begin(), levels.end()) - levels.begin() > 1) {
       candidates.push_back({"full, by region", candidates[fullIndex].strategy});
-      d.pilot.push_back(measure(candidates.back(), &regions, regionVariance.emplace_back(), images.emplace_back()));
+      d.pilot.push_back(measure(candidates.back(), &regions, images.emplace_back()));
     }
   }
   scorePilot();
@@ -349,12 +389,11 @@ AutoDecision decide(Scene& scene) {
     // full to emission ranged from 0.5 to 1.8 over seeds). So the winner is measured again on images
     // of two fresh sample ranges, the standing candidate once more, and the winner is kept only if the fresh
     // estimates still score it kAutoMargin ahead of the standing one's (both rounds pooled).
-    std::vector<double> unused;
     const GuidedRegions* map = candidates[chosen].name == "full, by region" ? &regions : nullptr;
     PixelMoments freshImage, freshImage2, standingImage;
-    const AutoMeasurement fresh = measure(candidates[chosen], map, unused, freshImage);
-    const AutoMeasurement fresh2 = measure(candidates[chosen], map, unused, freshImage2);
-    const AutoMeasurement standingAgain = measure(candidates[standing], nullptr, unused, standingImage);
+    const AutoMeasurement fresh = measure(candidates[chosen], map, freshImage);
+    const AutoMeasurement fresh2 = measure(candidates[chosen], map, freshImage2);
+    const AutoMeasurement standingAgain = measure(candidates[standing], nullptr, standingImage);
     // Pooled per candidate: the mean of its images' variances (against the shared mean) and work.
     std::vector<AutoMeasurement> pair{fresh, fresh2, d.pilot[standing], standingAgain};
     score(pair, {&freshImage, &freshImage2, &images[standing], &standingImage});
@@ -382,8 +421,11 @@ AutoDecision decide(Scene& scene) {
   else scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);
   if (d.chosen == "full, by region") {
-    char why[120];
-    std::snprintf(why, sizeof(why), "guided vertices in %.0f%% of the image's regions", 100.0 * regions.guidedShare());
+    size_t often = 0;
+    for (float q : regions.probability) often += q == kAutoOftenGuidedProbability;
+    char why[160];
+    std::snprintf(why, sizeof(why), "guided vertices in %.0f%% of the image's regions (one camera segment in two in %.0f%%)",
+                  100.0 * regions.guidedShare(), 100.0 * static_cast<double>(often) / static_cast<double>(regions.probability.size()));
     d.reasons.push_back(why);
     d.regions = regions;
     scene.setGuidedRegions(std::move(regions));

@@ -101,6 +101,10 @@ inline constexpr float kAutoRelativeEmissionWeight = 10.0f;
 // pixels is piloted as it is, at 2-8 spp, and keeps the pilot's samples; a larger one is piloted on
 // a copy of about 128 x 72 pixels at 8 spp.
 inline constexpr double kPilotSamples = 128.0 * 72.0 * 8.0;
+// The guided candidate that takes the guided camera vertex on one segment in two (full: one in ten),
+// and a level of the region map.
+inline constexpr float kAutoOftenGuidedProbability = 0.5f;
+inline constexpr const char* kAutoOftenGuidedName = "full, guided_probability 0.5";
 // How much more efficient than the plain candidate an elaborate one must be in the pilot.
 inline constexpr double kAutoMargin = 1.2;
 
