@@ -5,8 +5,10 @@
 //    scale; scattering (distance) sampling only when some volume scatters a light and enough camera
 //    rays are thin enough for it to help (a thick cloud never learns probes).
 // 2. A pilot: the plain candidate and the guided camera vertex ("full") render a few samples per
-//    pixel of a small image; the refinements of guiding (deeper guiding, equiangular) follow only
-//    when full is ahead. Each one's variance per sample (the film's sums of squares), relative to a
+//    pixel of a small image; the refinements of guiding follow only where full is ahead: the
+//    guided vertex on one camera segment in two when full led in the image or in some region,
+//    equiangular when it led in the image. A region map (q = 0, full's 0.1 or 0.5 per region) is
+//    one more candidate where the regions' best differ. Each one's variance per sample (the film's sums of squares), relative to a
 //    mean image all candidates share and absolute, times its work (work.h: counted, never timed)
 //    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
 //    highest is kept (the report holds auto to the best preset by relMSE and by MSE) if it beats
@@ -33,7 +35,7 @@ class Film;
 class Scene;
 
 struct AutoCandidate {
-  std::string name;  // "emission", "full", "full, guided_segments 8", ...
+  std::string name;  // "emission", "full", "full, guided_probability 0.5", ...
   StrategySettings strategy;
   // The candidate the others must beat by kAutoMargin in the pilot (exactly one per list): the plain
   // one, or `full` where volumes emit into thin scattering media (autoCandidates says why).
