@@ -275,9 +275,11 @@ AutoDecision decide(Scene& scene) {
   // and the absolute variance (both against the shared mean, as the score's) each over the plain
   // candidate's whole-image total and summed, as the score weighs both metrics; a guided q must
   // beat the plain candidate by kAutoMargin. Work is each candidate's per sample over the whole image.
-  // (Choosing each region to maximise the map's predicted score instead fitted the pilot's noise:
-  // at 2 spp a plain region that drew no rare bright sample looks calm, and the maps it chose
-  // measured worse than full on fresh samples.)
+  // Tried and not kept: choosing each region to maximise the map's predicted score fitted the
+  // pilot's noise (at 2 spp a plain region that drew none of its rare bright samples looks calm) and
+  // its maps measured behind full on fresh samples; deciding on each region's figures summed with
+  // its 3 x 3 neighbours' was better on some seeds of god-rays-backlit and worse on god-rays-dark
+  // and shed-fire.
   auto regionMap = [&](const std::vector<size_t>& guided) {
     const int width = pilotCamera.resolution.first, height = pilotCamera.resolution.second;
     const RegionalVariance plain = regionalVarianceAgainst(images[0].variance, sharedMean, width, height, regionSize);
