@@ -230,6 +230,9 @@ AutoDecision decide(Scene& scene) {
     ++sharedCount;
     for (size_t i = 0; i < pm.mean.size(); ++i) sharedMean[i] += (pm.mean[i] - sharedMean[i]) / static_cast<float>(sharedCount);
   };
+  // One renderer for every pilot image: they share its camera-ray guide tables, which a new q or
+  // region map does not rebuild (camera_guides.h).
+  ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
   // other pilot image) and measures it; `regions` (for "full, by region") are applied after its
   // strategy. The per-pixel moments go to `moments`.
@@ -238,19 +241,18 @@ AutoDecision decide(Scene& scene) {
     scene.setStrategy(c.strategy);
     if (map) scene.setGuidedRegions(*map);
     if (!hadProbes && scene.probes()) d.probeSeconds += scene.probes()->learnSeconds();
-    RenderOptions options{0, 16};
-    options.firstSample = nextSample;
+    renderer.setFirstSample(nextSample);
     nextSample += d.pilotSpp;
-    ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), options);
+    const WorkCounters before = renderer.work();
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
+    const WorkCounters work = renderer.work() - before;
     if (keep) kept.addPass(film);
     moments = pixelMoments(film);
     share(moments);
     AutoMeasurement m;
     m.name = c.name;
     m.absoluteVariance = variancePerSample(film);
-    const WorkCounters& work = renderer.work();
     m.workPerSample = work.cost() / std::max<double>(1.0, static_cast<double>(work.samples));
     d.pilotWork += work.cost();
     return m;

@@ -18,10 +18,27 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   if (g.guide != DistanceGuide::Probes) return false;
   char identity[64];
   std::snprintf(identity, sizeof identity, "%p/%p/", static_cast<const void*>(&scene), static_cast<const void*>(tracer.probes()));
-  std::string key = identity + toJson(scene.desc().camera).dump() + toJson(g).dump();
-  for (float q : scene.guidedRegions().probability) key += std::to_string(q) + ",";  // auto's region map
-  if (key == key_) return true;
+  // The tables depend on the camera, the probes and the guiding settings but q; each pixel's q
+  // (the settings' or auto's region map) is refreshed without rebuilding them, so auto's pilot
+  // renders its q levels and region maps on tables built once.
+  GuidingSettings tableSettings = g;
+  tableSettings.guided_probability = 0.0f;
+  const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(tableSettings).dump();
+  std::string probabilityKey = std::to_string(g.guided_probability) + ";";
+  for (float q : scene.guidedRegions().probability) probabilityKey += std::to_string(q) + ",";  // auto's region map
+  if (key == key_) {
+    if (probabilityKey != probabilityKey_) {
+      probabilityKey_ = probabilityKey;
+      for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x) {
+          const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+          if (present_[i]) guides_[i].guidedProbability = guidedProbabilityAt(scene, x, y, width_, height_);
+        }
+    }
+    return true;
+  }
   key_ = key;
+  probabilityKey_ = probabilityKey;
   ++builds_;
   width_ = camera.width();
   height_ = camera.height();

@@ -5,7 +5,8 @@
 // built once, from its centre ray, over the unit interval of that ray's medium interval; every
 // camera ray through the pixel borrows it, mapped onto its own interval (GuidedDistance::borrow).
 // The density then depends on the ray's pixel and position alone, never on the walk, so MIS stays
-// unbiased. Any change of the key (camera, probe set, strategy) rebuilds the tables.
+// unbiased. Any change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q
+// (or region map of q) only refreshes each pixel's.
 #pragma once
 
 #include "distance_sampler.h"
@@ -42,7 +43,8 @@ class CameraGuides {
   int builds() const { return builds_; }  // how many times the tables were (re)built
 
  private:
-  std::string key_;
+  std::string key_;             // what the tables depend on
+  std::string probabilityKey_;  // what the pixels' q depend on
   int width_ = 0, height_ = 0;
   std::vector<float> data_;  // every pixel's ts, vs, cdf, back to back
   std::vector<PiecewiseLinearView> views_;

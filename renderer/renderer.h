@@ -39,6 +39,10 @@ class ProgressiveRenderer {
   // unfinished pass is discarded). Returns the seconds spent.
   double renderBudget(Film& film, int spp, double seconds, int passSpp = 1);
 
+  // Where the next film's samples start (RenderOptions::firstSample): auto's pilot renders every
+  // candidate image with one renderer, so that they share its camera-ray guide tables.
+  void setFirstSample(int firstSample) { options_.firstSample = firstSample; }
+
   const Scene& scene() const { return *scene_; }
   // The work of every pass rendered so far (work.h): counted, so the same on any machine.
   const WorkCounters& work() const { return work_; }

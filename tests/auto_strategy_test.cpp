@@ -192,18 +192,35 @@ TEST(AutoStrategy, ARegionMapSetsEachPixelsGuidedProbability) {
   const PathTracer tracer(*scene);
   CameraGuides cache;
   ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
-  int guidedRight = 0;
+  int guidedRight = 0, guidedRow = 0;
   for (int y = 0; y < 18; ++y) {
     EXPECT_EQ(cache.at(5, y)->guidedProbability, 0.0f);
     if (!cache.at(25, y)->table) continue;
     EXPECT_EQ(cache.at(25, y)->guidedProbability, 0.75f);
     ++guidedRight;
+    guidedRow = y;
   }
   EXPECT_GT(guidedRight, 0);
   scene->setStrategy(scene->strategy());
   EXPECT_TRUE(scene->guidedRegions().empty()) << "a new strategy clears auto's map";
   ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
-  EXPECT_EQ(cache.builds(), 2) << "the map is part of the cache key";
+  EXPECT_EQ(cache.builds(), 1) << "a new map or q refreshes the pixels' q, not the tables";
+  const float q = scene->strategy().guiding.guided_probability;
+  for (int y = 0; y < 18; ++y)
+    for (int x : {5, 25})
+      if (cache.at(x, y)->table) {
+        EXPECT_EQ(cache.at(x, y)->guidedProbability, q) << x << "," << y;
+      }
+  StrategySettings often = scene->strategy();
+  often.guiding.guided_probability = 0.5f;
+  scene->setStrategy(often);
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  EXPECT_EQ(cache.builds(), 1);
+  EXPECT_EQ(cache.at(25, guidedRow)->guidedProbability, 0.5f);
+  often.guiding.floor *= 2.0f;
+  scene->setStrategy(often);
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  EXPECT_EQ(cache.builds(), 2) << "any other guiding setting rebuilds the tables";
 }
 
 // An image no larger than the pilot's sample count is piloted as it is, and the pilot's samples
