@@ -299,7 +299,7 @@ AutoDecision decide(Scene& scene) {
     };
     double relativeTotal = total(plain.relative), absoluteTotal = total(plain.absolute);
     for (const RegionalVariance& l : levels)
-        relativeTotal = std::min(relativeTotal, total(l.relative)), absoluteTotal = std::min(absoluteTotal, total(l.absolute));
+      relativeTotal = std::min(relativeTotal, total(l.relative)), absoluteTotal = std::min(absoluteTotal, total(l.absolute));
     GuidedRegions map;
     map.regionsX = plain.regionsX, map.regionsY = plain.regionsY;
     for (size_t r = 0; r < plain.relative.size(); ++r) {
