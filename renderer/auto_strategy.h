@@ -8,8 +8,9 @@
 //    pixel of a small image; the refinements of guiding follow only where full is ahead: the
 //    guided vertex on one camera segment in two when full led in the image or in some region,
 //    equiangular when it led in the image. A region map (q = 0, full's 0.1 or 0.5 per region) is
-//    one more candidate where the regions' best differ. Each one's variance per sample (the film's sums of squares), relative to a
-//    mean image all candidates share and absolute, times its work (work.h: counted, never timed)
+//    one more candidate where the regions' best differ. Each one's variance per sample (the film's
+//    sums of squares), relative to a mean image all candidates share and absolute, times its work
+//    (work.h: counted, never timed)
 //    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
 //    highest is kept (the report holds auto to the best preset by relMSE and by MSE) if it beats
 //    the standing candidate by kAutoMargin: the plain one, or full where volumes emit into thin

@@ -135,12 +135,19 @@ PixelMoments pixelMoments(const Film& film) {
   return m;
 }
 
-double relativeVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean) {
-  if (variance.empty() || variance.size() != mean.size()) return 0.0;
+namespace {
+// The relMSE's eps for a shared mean image: (0.1 x its mean)^2.
+double relativeEps(const std::vector<float>& mean) {
   double meanOfMean = 0.0;
   for (float v : mean) meanOfMean += v;
-  meanOfMean /= static_cast<double>(mean.size());
-  const double eps = (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+  meanOfMean /= static_cast<double>(std::max<size_t>(1, mean.size()));
+  return (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+}
+}  // namespace
+
+double relativeVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean) {
+  if (variance.empty() || variance.size() != mean.size()) return 0.0;
+  const double eps = relativeEps(mean);
   double total = 0.0;
   for (size_t i = 0; i < variance.size(); ++i) total += variance[i] / (static_cast<double>(mean[i]) * mean[i] + eps);
   return total / static_cast<double>(variance.size());
@@ -153,10 +160,7 @@ RegionalVariance regionalVarianceAgainst(const std::vector<float>& variance, con
   out.regionsX = (width + size - 1) / size, out.regionsY = (height + size - 1) / size;
   const size_t channels = 3 * static_cast<size_t>(width) * static_cast<size_t>(height);
   if (variance.size() != channels || mean.size() != channels) return out;
-  double meanOfMean = 0.0;
-  for (float v : mean) meanOfMean += v;
-  meanOfMean /= static_cast<double>(std::max<size_t>(1, mean.size()));
-  const double eps = (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+  const double eps = relativeEps(mean);
   const size_t regions = static_cast<size_t>(out.regionsX) * static_cast<size_t>(out.regionsY);
   out.relative.assign(regions, 0.0);
   out.absolute.assign(regions, 0.0);
