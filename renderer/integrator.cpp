@@ -2,6 +2,8 @@
 
 #include "phase.h"
 
+#include <memory>
+
 namespace candela {
 
 namespace {
@@ -501,6 +503,38 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   return L;
 }
 
+namespace {
+// A segment's guided density, reused by the next path this thread traces at the same recursion
+// level (a continuing guided vertex traces its own path one level down). Its vectors keep their
+// capacity, so a path whose secondary segments build densities from probe knots
+// (guided_segments > 1) allocates nothing once warm: fresh densities per path spent about a tenth of
+// such a render in malloc and free. Every use rebuilds the density (prepareGuide) before reading it,
+// so nothing carries from one path to the next but capacity.
+class ReusedGuide {
+ public:
+  ReusedGuide() {
+    Pool& pool = threadPool();
+    if (pool.depth == pool.guides.size()) pool.guides.push_back(std::make_unique<GuidedDistance>());
+    guide_ = pool.guides[pool.depth++].get();
+  }
+  ~ReusedGuide() { --threadPool().depth; }
+  ReusedGuide(const ReusedGuide&) = delete;
+  ReusedGuide& operator=(const ReusedGuide&) = delete;
+  GuidedDistance& get() { return *guide_; }
+
+ private:
+  struct Pool {
+    std::vector<std::unique_ptr<GuidedDistance>> guides;
+    size_t depth = 0;
+  };
+  static Pool& threadPool() {
+    thread_local Pool pool;
+    return pool;
+  }
+  GuidedDistance* guide_ = nullptr;
+};
+}  // namespace
+
 Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng) const {
   const Scene& s = scene_;
   const StrategySettings& strategy = s.strategy();
@@ -508,7 +542,8 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
   const int maxDepth = s.render().max_depth;
   const bool volumeNee = !s.volumeLights().empty();
   const bool needTail = s.hasEmissiveMedia() && !volumeNee;
-  GuidedDistance guide;  // this path's segment density (a continuing guided vertex traces its own)
+  ReusedGuide reusedGuide;  // this path's segment density (a continuing guided vertex traces its own)
+  GuidedDistance& guide = reusedGuide.get();
   Rgb L(0.0f);
 
   for (;;) {
