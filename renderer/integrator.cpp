@@ -297,6 +297,7 @@ bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rn
   st.prevPdf = pdf;
   st.prevPos = p;
   st.ray = Ray{p, wi};
+  st.fromMedium = true;
   ++st.segment;
   return true;
 }
@@ -441,12 +442,15 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   const GuidingSettings& g = scene_.strategy().guiding;
   if (g.guide == DistanceGuide::None || st.segment >= g.guided_segments || st.lightsTaken || st.vertices >= scene_.render().max_depth)
     return false;
+  // Later rays by their origin alone (a choice by path prefix, never by this segment's walk): from
+  // surfaces they are left to tracking under from_media.
+  if (st.segment > 0 && g.secondary_rays == SecondaryRays::FromMedia && !st.fromMedium) return false;
   const bool cached = st.segment == 0 && cameraGuide;
   // A pixel whose q is 0 (no table, or auto's region map said tracking alone) gets no guided
   // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
   if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table)) return false;
   ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table
-  guide.guidedProbability = cached ? cameraGuide->guidedProbability : g.guided_probability;
+  guide.guidedProbability = cached ? cameraGuide->guidedProbability : st.segment > 0 ? g.secondary_probability : g.guided_probability;
   float tIn = 0.0f, tOut = 0.0f;
   if (cached) {
     // The pixel's cached table (camera_guides.h), mapped onto this ray's own medium interval. The
@@ -647,6 +651,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     st.prevVolumeLightPdf = -1.0f;
     st.prevPos = p;
     st.ray = Ray{p, wi};
+    st.fromMedium = false;
     ++st.segment;
   }
   return L;

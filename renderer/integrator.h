@@ -90,6 +90,7 @@ class PathTracer {
     float prevPdf = 0.0f;      // solid-angle pdf of the direction that made `ray` (0: camera ray)
     float prevVolumeLightPdf = -1.0f;  // volumeLightPdf(prevPos, ray.direction) when already known, else < 0
     Vec3 prevPos{0.0f};
+    bool fromMedium = false;   // `ray` leaves a scattering vertex in a medium (not a surface or the camera)
   };
   struct SegmentWalk;  // what the tracked walk of one segment found (integrator.cpp)
 

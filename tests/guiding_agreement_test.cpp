@@ -1,6 +1,7 @@
 // Guided distance sampling is unbiased: `full` (probes + one-sample MIS), `equiangular`, probe guiding
 // alone (guided_only, no tracked scattering), MIS off (the two techniques averaged), the power
-// heuristic, a guided vertex that continues its own path, guiding on every segment, the balance
+// heuristic, a guided vertex that continues its own path, guiding on every segment, guided
+// continuations from medium vertices only (the tracked vertex weighing nothing there), the balance
 // heuristic over both vertices and one-sample MIS in path mode all agree
 // with `conventional` on god-rays (side-lit and backlit), torch-in-mist, cloud and a point light
 // inside the medium, with the scattering medium's g = 0, 0.9 and -0.9 (docs/method.md s.5).
@@ -34,7 +35,10 @@ const std::vector<std::pair<const char*, std::vector<std::string>>>& variants() 
       // The guided vertex continues a path too (docs/method.md s.4's simplest form) instead of adding only
       // its direct light; and direct-light guiding on every segment of the path.
       {"guided vertex continues (path)", {"strategy.preset=\"full\"", "strategy.guiding.guided_vertex=\"path\""}},
-      {"every segment guided", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=64"}},
+      {"every segment guided", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=64", "strategy.guiding.secondary_rays=\"all\""}},
+      // Guided continuations: the rays leaving a medium vertex guided too, their guided vertex on
+      // every such segment (secondary_probability 1: the tracked vertex there weighs nothing).
+      {"continuations from media, q 1", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=2"}},
       // One-sample MIS: one vertex per guided segment, picked at random (guided with probability q).
       {"balance MIS (two vertices)", {"strategy.preset=\"full\"", "strategy.guiding.combination=\"balance\""}},
       {"one-sample MIS, path, q = 0.8",
