@@ -41,6 +41,14 @@ bool PathTracer::guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, G
   } else {
     out.knots.clear();
     if (probes_) probes_->gatherKnots(ray, tIn, tOut, out.knots);
+    // A ray whose probes carry no light (it crosses the media's box where they are empty or
+    // unlit) is left to tracking, as a thick one is: its guided density would be the floor alone,
+    // a vertex drawn uniformly where no light scatters. Again a choice by the ray alone. On fire,
+    // whose box is mostly empty around the flame, this cut full's work per sample by 2% for the
+    // same variance (README, "Guided continuations" lists the measurement).
+    float peak = 0.0f;
+    for (const DistanceKnot& k : out.knots) peak = std::max(peak, k.value);
+    if (!(peak > 0.0f)) return false;
     out.buildPiecewiseLinear(tIn, tOut, g.floor);
   }
   return true;

@@ -46,7 +46,8 @@ class PathTracer {
 
   // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy
   // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
-  // no medium, or thicker than guiding.max_optical_depth). For the inspector and the camera cache.
+  // no medium, thicker than guiding.max_optical_depth, or no probe along it carries light). For the
+  // inspector and the camera cache.
   bool guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out) const;
   // Optical depth of the majorant of mu_t along a whole ray through the media (no surfaces), or a
   // negative value when the ray misses every medium. For the auto strategy's scene rules.

@@ -280,6 +280,34 @@ TEST(GuideInspector, IdealCurveMatchesTheClosedFormOfAPointLightInASlab) {
   EXPECT_LT(r.varianceGuided, r.varianceTracked);
 }
 
+// A ray through the media's box whose probes carry no light gets no guided density: its guided
+// vertex would be drawn from the floor alone, where nothing scatters light. The fire's box is
+// mostly empty around the flame, so its corners' camera rays are such rays; those through the
+// smoke keep their guide.
+TEST(Guiding, RaysWhoseProbesCarryNoLightAreLeftToTracking) {
+  auto scene = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"full\"", "camera.resolution=[32,32]"}));
+  ASSERT_NE(scene->probes(), nullptr);
+  const PathTracer tracer(*scene);
+  int unlit = 0, guidedRays = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const Ray ray = scene->camera().generate(x + 0.5f, y + 0.5f);
+      const float depth = tracer.mediaOpticalDepth(ray);
+      if (depth < 0.0f || depth > scene->strategy().guiding.max_optical_depth) continue;  // no medium, or thick
+      float tIn, tOut;
+      GuidedDistance guide;
+      const bool guided = tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, guide);
+      std::vector<DistanceKnot> knots;
+      scene->probes()->gatherKnots(ray, tIn, tOut, knots);
+      const bool lit = std::any_of(knots.begin(), knots.end(), [](const DistanceKnot& k) { return k.value > 0.0f; });
+      EXPECT_EQ(guided, lit) << x << "," << y;
+      unlit += !lit;
+      guidedRays += guided;
+    }
+  EXPECT_GT(unlit, 50) << "the fire's box has empty corners";
+  EXPECT_GT(guidedRays, 50) << "and smoke lit by the flame";
+}
+
 // A pixel's cached camera-ray table gives the same density as building it for the pixel's centre
 // ray (mapped onto the ray's medium interval), so the cache changes cost, never the sampling.
 TEST(CameraGuides, TablesEqualPerRayDensities) {
