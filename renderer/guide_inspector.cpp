@@ -1,5 +1,6 @@
 #include "guide_inspector.h"
 
+#include "camera_guides.h"
 #include "integrator.h"
 #include "phase.h"
 
@@ -44,12 +45,22 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
       r.note = "the ray misses every medium";
       return r;
     }
+    std::vector<DistanceKnot> knots;
+    if (settings.guide == DistanceGuide::Probes && scene.probes()) scene.probes()->gatherKnots(ray, tIn, tOut, knots);
+    const bool lit = std::any_of(knots.begin(), knots.end(), [](const DistanceKnot& k) { return k.value > 0.0f; });
     r.note = settings.guide == DistanceGuide::None ? "the strategy does not guide distances (guiding.guide = none)"
-                                                    : "not guided: thicker than guiding.max_optical_depth";
+             : settings.guide == DistanceGuide::Probes && !lit && tracer.mediaOpticalDepth(ray) <= settings.max_optical_depth
+                 ? "not guided: no probe along the ray carries light"
+                 : "not guided: thicker than guiding.max_optical_depth";
   } else if (segment >= settings.guided_segments) {
     r.note = "not guided on this segment (guiding.guided_segments = " + std::to_string(settings.guided_segments) + "); the density shown is what it would be";
   }
   r.guided = hasDensity && segment < settings.guided_segments;
+  if (settings.combination == GuideCombination::GuidedOnly) r.mixtureProbability = 1.0;
+  if (settings.combination == GuideCombination::OneSample)
+    r.mixtureProbability = options.guided_probability >= 0.0f ? options.guided_probability
+                           : segment == 0                     ? settings.guided_probability
+                                                              : settings.secondary_probability;
   r.tIn = tIn;
   r.tOut = tOut;
   const int n = std::max(8, options.bins);
@@ -105,7 +116,7 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
     r.ideal[i] = r.integral > 0.0 ? r.f[i] / r.integral : 0.0;
     r.trackedPdf[i] = gather ? scatterRate[i] * scatterTransmittance[i] : r.sigmaS[i] * r.transmittance[i];
     r.guidedPdf[i] = hasDensity ? guide.pdf(static_cast<float>(r.t[i])) : 0.0;
-    r.misPdf[i] = r.guided ? 0.5 * (r.guidedPdf[i] + r.trackedPdf[i]) : r.trackedPdf[i];
+    r.misPdf[i] = r.guided ? r.mixtureProbability * r.guidedPdf[i] + (1.0 - r.mixtureProbability) * r.trackedPdf[i] : r.trackedPdf[i];
   }
   if (hasDensity)
     for (const DistanceKnot& k : guide.knots) r.knots.push_back({k.t, guide.pdf(k.t)});
@@ -117,7 +128,11 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
 
 GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspectOptions& options) {
   const Ray camera = scene.camera().generate(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
-  if (options.secondary_seed < 0) return inspectGuideAlongRay(scene, camera, 0, options);
+  if (options.secondary_seed < 0) {
+    GuideInspectOptions pixel = options;
+    if (pixel.guided_probability < 0.0f) pixel.guided_probability = guidedProbabilityAt(scene, x, y, scene.camera().width(), scene.camera().height());
+    return inspectGuideAlongRay(scene, camera, 0, pixel);
+  }
   // A path chosen by the seed: a scattering distance on the camera ray from the tracked density
   // (conditioned on scattering), then a direction from the phase function there.
   GuideInspectOptions coarse = options;
@@ -147,8 +162,8 @@ std::string inspectionSummary(const GuideInspection& r) {
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "segment %d, medium [%.4g, %.4g], optical depth %.3g, int f = %.4g; variance factor int f^2/p / (int f)^2: guided %.4g, "
-                "tracked %.4g, mis %.4g%s%s",
-                r.segment, r.tIn, r.tOut, r.opticalDepth, r.integral, r.varianceGuided, r.varianceTracked, r.varianceMis,
+                "tracked %.4g, mis (guided share %.3g) %.4g%s%s",
+                r.segment, r.tIn, r.tOut, r.opticalDepth, r.integral, r.varianceGuided, r.varianceTracked, r.mixtureProbability, r.varianceMis,
                 r.note.empty() ? "" : "; ", r.note.c_str());
   return buf;
 }
@@ -206,7 +221,7 @@ void writeInspectionSvg(const std::string& path, const GuideInspection& r, const
   std::snprintf(legend[0], sizeof legend[0], "ideal mu_s L_s T (normalised), int f = %.4g", r.integral);
   std::snprintf(legend[1], sizeof legend[1], "guided (probe knots as dots): V = %.4g", r.varianceGuided);
   std::snprintf(legend[2], sizeof legend[2], "tracked: V = %.4g (optical depth %.3g)", r.varianceTracked, r.opticalDepth);
-  std::snprintf(legend[3], sizeof legend[3], "MIS mixture: V = %.4g", r.varianceMis);
+  std::snprintf(legend[3], sizeof legend[3], "MIS mixture (guided share %.3g): V = %.4g", r.mixtureProbability, r.varianceMis);
   const char* colours[4] = {"#111", "#e07b2a", "#2a7fd4", "#3aa655"};
   for (int k = 0; k < 4; ++k) {
     const int y = H - bottom + 54 + (k % 2) * 18, x = left + (k / 2) * 400;

@@ -12,8 +12,11 @@
 // - tracked: the density of the tracked walk's scattering distance: mu_s T for analog events;
 //            with emission gathering (P_s = mu_s / (mu_s + mu_n)) s' exp(-int s'), s' = mu_bar P_s.
 //            It integrates to the probability of scattering before tOut (less than 1).
-// - mis:     (p_g + p_t) / 2, the mixture that one sample of each technique under the balance
-//            heuristic draws from.
+// - mis:     the mixture the strategy's MIS draws from: q p_g + (1 - q) p_t under one-sample MIS
+//            (guiding.combination = one_sample), q the ray's guided probability (the pixel's, from
+//            auto's region map where there is one, guiding.guided_probability on camera rays,
+//            guiding.secondary_probability on later ones); p_g alone for guided_only;
+//            (p_g + p_t) / 2 when each technique draws one sample (balance, power, average).
 // Variance factor of a density p: V = int f^2 / p dt / (int f dt)^2. 1 is perfect importance
 // sampling; V - 1 is the relative variance of the one-sample estimator f / p (for the tracked
 // density, whose mass is below 1, V counts its pass-through samples as zeros).
@@ -31,6 +34,9 @@ struct GuideInspectOptions {
   int bins = 256;              // points along the ray
   int light_samples = 256;     // light samples per point for the ideal curve
   int secondary_seed = -1;     // >= 0: inspect the secondary ray of a path chosen by this seed
+  // The one-sample q of the mixture; < 0: the strategy's for the ray's segment (inspectGuide puts
+  // the pixel's there for its camera ray).
+  float guided_probability = -1.0f;
   uint64_t seed = 1;
 };
 
@@ -39,6 +45,7 @@ struct GuideInspection {
   int segment = 0;                // 0: the camera ray; 1: the secondary ray
   float tIn = 0.0f, tOut = 0.0f;  // the ray's medium interval (empty: the ray misses every medium)
   bool guided = false;            // the strategy would draw a guided sample on this ray
+  double mixtureProbability = 0.5;  // the guided technique's share in misPdf (q under one-sample MIS)
   std::string note;               // why not, when it would not
   double opticalDepth = 0.0;      // int mu_t over [tIn, tOut]
   std::vector<double> t, f, ideal, guidedPdf, trackedPdf, misPdf, transmittance, sigmaS, inScattered;

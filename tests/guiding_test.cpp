@@ -280,6 +280,28 @@ TEST(GuideInspector, IdealCurveMatchesTheClosedFormOfAPointLightInASlab) {
   EXPECT_LT(r.varianceGuided, r.varianceTracked);
 }
 
+// The MIS curve is the mixture the strategy draws from: q p_g + (1 - q) p_t with the ray's q under
+// one-sample MIS (full's one in ten on camera rays, the secondary q on later rays), the even mixture
+// when each technique draws a sample.
+TEST(GuideInspector, MisCurveIsTheStrategysMixture) {
+  auto check = [](const std::vector<std::string>& sets, int secondarySeed, double q) {
+    auto scene = Scene::build(test::loadScene("assets/scenes/test/point-in-slab.json", sets));
+    GuideInspectOptions options;
+    options.bins = 32;
+    options.light_samples = 4;
+    options.secondary_seed = secondarySeed;
+    const GuideInspection r = inspectGuide(*scene, 1, 1, options);
+    ASSERT_TRUE(r.guided) << r.note;
+    EXPECT_DOUBLE_EQ(r.mixtureProbability, q);
+    for (size_t i = 0; i < r.t.size(); ++i)
+      EXPECT_NEAR(r.misPdf[i], q * r.guidedPdf[i] + (1.0 - q) * r.trackedPdf[i], 1e-9 + 1e-6 * r.misPdf[i]) << i;
+  };
+  check({}, -1, 0.1f);
+  check({"strategy.guiding.guided_probability=0.3"}, -1, 0.3f);
+  check({"strategy.guiding.guided_segments=2", "strategy.guiding.secondary_probability=0.7"}, 3, 0.7f);
+  check({"strategy.guiding.combination=\"balance\""}, -1, 0.5);
+}
+
 // A ray through the media's box whose probes carry no light gets no guided density: its guided
 // vertex would be drawn from the floor alone, where nothing scatters light. The fire's box is
 // mostly empty around the flame, so its corners' camera rays are such rays; those through the

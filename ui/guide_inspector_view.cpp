@@ -102,7 +102,7 @@ void GuideInspectorView::draw() {
   ImGui::SameLine();
   ImGui::TextColored(ImColor(colours[2]), "tracked V=%.3g", r->varianceTracked);
   ImGui::SameLine();
-  ImGui::TextColored(ImColor(colours[3]), "MIS V=%.3g", r->varianceMis);
+  ImGui::TextColored(ImColor(colours[3]), "MIS (q %.2g) V=%.3g", r->mixtureProbability, r->varianceMis);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("V = int f^2/p / (int f)^2: 1 is perfect importance sampling");
   if (!r->note.empty()) ImGui::TextDisabled("%s", r->note.c_str());
 
