@@ -52,7 +52,7 @@ elseif(MODE STREQUAL "inspect")
   # The guide inspector opened on a pixel as a Ctrl+click would: its chart's variance factors.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy full --set camera.resolution=[160,90] --inspect 95,40
               --screenshot ${OUT}/inspect.png --after-spp 2 --quit)
-  if(NOT LAST_OUTPUT MATCHES "inspector: pixel \\(95, 40\\), full, camera ray: .*guided [0-9.]+, tracked [0-9.]+, mis [0-9.]+")
+  if(NOT LAST_OUTPUT MATCHES "inspector: pixel \\(95, 40\\), full, camera ray: .*guided [0-9.]+, tracked [0-9.]+, mis \\(guided share [0-9.]+\\) [0-9.]+")
     message(FATAL_ERROR "no inspection reported")
   endif()
 elseif(MODE STREQUAL "bad_input")
