@@ -19,6 +19,14 @@ struct DistanceKnot {
   float value = 0.0f;
 };
 
+// True when some knot predicts light scattered (a positive value): a density of knots that all
+// predict none would be its floor alone.
+inline bool knotsCarryLight(const std::vector<DistanceKnot>& knots) {
+  for (const DistanceKnot& k : knots)
+    if (k.value > 0.0f) return true;
+  return false;
+}
+
 // A piecewise-linear density's tables, stored elsewhere (a PiecewiseLinearDistance, or a pixel's
 // entry in the camera-ray cache): segment ends ts, values vs at them, cumulative area cdf, n each.
 struct PiecewiseLinearView {

@@ -47,7 +47,7 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
     }
     std::vector<DistanceKnot> knots;
     if (settings.guide == DistanceGuide::Probes && scene.probes()) scene.probes()->gatherKnots(ray, tIn, tOut, knots);
-    const bool lit = std::any_of(knots.begin(), knots.end(), [](const DistanceKnot& k) { return k.value > 0.0f; });
+    const bool lit = knotsCarryLight(knots);
     r.note = settings.guide == DistanceGuide::None ? "the strategy does not guide distances (guiding.guide = none)"
              : settings.guide == DistanceGuide::Probes && !lit && tracer.mediaOpticalDepth(ray) <= settings.max_optical_depth
                  ? "not guided: no probe along the ray carries light"

@@ -321,7 +321,7 @@ TEST(Guiding, RaysWhoseProbesCarryNoLightAreLeftToTracking) {
       const bool guided = tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, guide);
       std::vector<DistanceKnot> knots;
       scene->probes()->gatherKnots(ray, tIn, tOut, knots);
-      const bool lit = std::any_of(knots.begin(), knots.end(), [](const DistanceKnot& k) { return k.value > 0.0f; });
+      const bool lit = knotsCarryLight(knots);
       EXPECT_EQ(guided, lit) << x << "," << y;
       unlit += !lit;
       guidedRays += guided;
