@@ -49,6 +49,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   // Rows in parallel, each into its own buffer; then one flat array and the views into it.
   std::vector<std::vector<float>> rows(static_cast<size_t>(height_));
   std::vector<std::vector<uint32_t>> offsets(static_cast<size_t>(height_));
+  predicted_.assign(pixels, 0.0f);
   tbb::parallel_for(0, height_, [&](int y) {
     GuidedDistance guide;
     PiecewiseLinearDistance unit;
@@ -59,6 +60,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       float tIn, tOut;
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, guide)) continue;
+      predicted_[i] = static_cast<float>(knotsIntegral(guide.knots, tIn, tOut));
       const float length = std::max(tOut - tIn, 1e-7f);
       for (DistanceKnot& k : guide.knots) k.t = (k.t - tIn) / length;
       unit.build(0.0f, 1.0f, guide.knots, g.floor);
@@ -74,6 +76,15 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       present_[i] = 1;
     }
   });
+  // Dim pixels are left to tracking (guiding.dim_pixel_floor): a choice by pixel, from the probes'
+  // prediction for its centre ray, so MIS stays unbiased. Summed in pixel order: the same floor on
+  // any thread count.
+  double sum = 0.0;
+  for (float v : predicted_) sum += v;
+  dimThreshold_ = static_cast<float>(g.dim_pixel_floor * sum / static_cast<double>(std::max<size_t>(1, pixels)));
+  dimPixels_ = 0;
+  for (size_t i = 0; i < pixels; ++i)
+    if (present_[i] && predicted_[i] < dimThreshold_) present_[i] = 0, guides_[i].guidedProbability = 0.0f, ++dimPixels_;
   size_t total = 0;
   for (const auto& r : rows) total += r.size();
   data_.clear();

@@ -32,7 +32,8 @@ class CameraGuides {
   // guiding (then there is nothing to cache).
   bool prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera);
   // The pixel's unit-interval table and q. A pixel whose centre ray gets no guided sample (no
-  // medium, thicker than guiding.max_optical_depth) has no table and q = 0: its rays get none
+  // medium, thicker than guiding.max_optical_depth, no probe light, dimmer than
+  // guiding.dim_pixel_floor of the image's mean prediction) has no table and q = 0: its rays get none
   // either, a choice by pixel that spares every camera sample the interval and thickness walks.
   const CameraRayGuide* at(int x, int y) const {
     return &guides_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
@@ -41,6 +42,14 @@ class CameraGuides {
     return data_.size() * sizeof(float) + views_.size() * (sizeof(PiecewiseLinearView) + sizeof(CameraRayGuide) + 1);
   }
   int builds() const { return builds_; }  // how many times the tables were (re)built
+  // The probes' prediction of the light scattered along the pixel's centre ray (knotsIntegral; 0
+  // where it gets no guided sample for another reason), the threshold below which a pixel is left
+  // to tracking (guiding.dim_pixel_floor x the image's mean prediction), and how many pixels that left.
+  float predictedLight(int x, int y) const {
+    return predicted_.empty() ? 0.0f : predicted_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+  }
+  float dimThreshold() const { return dimThreshold_; }
+  size_t dimPixels() const { return dimPixels_; }
 
  private:
   std::string key_;             // what the tables depend on
@@ -50,6 +59,9 @@ class CameraGuides {
   std::vector<PiecewiseLinearView> views_;
   std::vector<CameraRayGuide> guides_;  // views_[i] and the pixel's q
   std::vector<char> present_;
+  std::vector<float> predicted_;
+  float dimThreshold_ = 0.0f;
+  size_t dimPixels_ = 0;
   int builds_ = 0;
 };
 

@@ -10,6 +10,7 @@
 
 #include "core.h"
 
+#include <algorithm>
 #include <vector>
 
 namespace candela {
@@ -25,6 +26,18 @@ inline bool knotsCarryLight(const std::vector<DistanceKnot>& knots) {
   for (const DistanceKnot& k : knots)
     if (k.value > 0.0f) return true;
   return false;
+}
+
+// The knots' integral over [t0, t1], flat beyond the outer knots as the density built from them
+// is: what the probes predict the segment scatters toward its origin (single scattering, without
+// the transmittance back to the origin). Knots sorted by t.
+inline double knotsIntegral(const std::vector<DistanceKnot>& knots, float t0, float t1) {
+  if (knots.empty()) return 0.0;
+  double sum = static_cast<double>(knots.front().value) * std::max(0.0f, knots.front().t - t0) +
+               static_cast<double>(knots.back().value) * std::max(0.0f, t1 - knots.back().t);
+  for (size_t k = 1; k < knots.size(); ++k)
+    sum += 0.5 * (static_cast<double>(knots[k].value) + knots[k - 1].value) * (knots[k].t - knots[k - 1].t);
+  return sum;
 }
 
 // A piecewise-linear density's tables, stored elsewhere (a PiecewiseLinearDistance, or a pixel's

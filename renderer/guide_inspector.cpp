@@ -56,6 +56,10 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
     r.note = "not guided on this segment (guiding.guided_segments = " + std::to_string(settings.guided_segments) + "); the density shown is what it would be";
   }
   r.guided = hasDensity && segment < settings.guided_segments;
+  if (r.guided && segment == 0 && options.dim_pixel) {
+    r.guided = false;
+    r.note = "not guided: its probes predict less light than guiding.dim_pixel_floor x the image's mean; the density shown is what it would be";
+  }
   if (settings.combination == GuideCombination::GuidedOnly) r.mixtureProbability = 1.0;
   if (settings.combination == GuideCombination::OneSample)
     r.mixtureProbability = options.guided_probability >= 0.0f ? options.guided_probability
@@ -131,6 +135,14 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
   if (options.secondary_seed < 0) {
     GuideInspectOptions pixel = options;
     if (pixel.guided_probability < 0.0f) pixel.guided_probability = guidedProbabilityAt(scene, x, y, scene.camera().width(), scene.camera().height());
+    const GuidingSettings& g = scene.strategy().guiding;
+    if (g.guide == DistanceGuide::Probes && g.dim_pixel_floor > 0.0f && scene.probes()) {
+      // The floor is relative to the whole image's prediction: the render's own pixel tables say.
+      CameraGuides tables;
+      const PathTracer tracer(scene);
+      tables.prepare(scene, tracer, scene.camera());
+      pixel.dim_pixel = tables.at(x, y)->table == nullptr && tables.predictedLight(x, y) > 0.0f;
+    }
     return inspectGuideAlongRay(scene, camera, 0, pixel);
   }
   // A path chosen by the seed: a scattering distance on the camera ray from the tracked density

@@ -37,6 +37,8 @@ struct GuideInspectOptions {
   // The one-sample q of the mixture; < 0: the strategy's for the ray's segment (inspectGuide puts
   // the pixel's there for its camera ray).
   float guided_probability = -1.0f;
+  // The pixel is left to tracking by guiding.dim_pixel_floor (inspectGuide finds out for its camera ray).
+  bool dim_pixel = false;
   uint64_t seed = 1;
 };
 

@@ -157,6 +157,11 @@ struct GuidingSettings {
   // learning short makes the image depend on machine speed, so it is reported as a warning.
   float probe_time_cap_s = 120.0f;
   float max_optical_depth = 4.0f; // skip guiding on rays thicker than this (majorant of mu_t); 0: never skip
+  // Camera rays of pixels whose probes predict less single-scattered light than this fraction of
+  // the mean prediction over the image are left to tracking (camera_guides.h): on fire, 40% of the
+  // pixels whose rays cross the smoke's box see next to nothing, and guiding them was 3% of the
+  // work for no variance (README, "Dim pixels"). 0: guide every pixel whose probes carry light.
+  float dim_pixel_floor = 0.05f;
 
   template <class V>
   void visit(V& v) {
@@ -190,6 +195,10 @@ struct GuidingSettings {
     v.field("max_optical_depth", max_optical_depth,
             "Rays whose majorant optical depth exceeds this get no guided sample: tracking already scatters there (0: guide all)",
             Range{0.0, 1e6});
+    v.field("dim_pixel_floor", dim_pixel_floor,
+            "Camera rays of pixels whose probes predict less scattered light than this fraction of the image's mean "
+            "prediction get no guided sample (0: guide every pixel whose probes carry light)",
+            Range{0.0, 1e3});
   }
 };
 

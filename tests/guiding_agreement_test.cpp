@@ -41,6 +41,9 @@ const std::vector<std::pair<const char*, std::vector<std::string>>>& variants() 
       {"continuations from media, q 1", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=2"}},
       // One-sample MIS: one vertex per guided segment, picked at random (guided with probability q).
       {"balance MIS (two vertices)", {"strategy.preset=\"full\"", "strategy.guiding.combination=\"balance\""}},
+      // Pixels left to tracking by the probes' prediction (a floor at the image's mean leaves about
+      // half of them): a choice by pixel, so the image keeps its expectation.
+      {"dim pixels unguided, floor 1", {"strategy.preset=\"full\"", "strategy.guiding.dim_pixel_floor=1"}},
       {"one-sample MIS, path, q = 0.8",
        {"strategy.preset=\"full\"", "strategy.guiding.combination=\"one_sample\"", "strategy.guiding.guided_vertex=\"path\"",
         "strategy.guiding.guided_probability=0.8"}},

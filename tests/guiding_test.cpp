@@ -58,6 +58,15 @@ TEST(PiecewiseLinear, MatchesItsPdfForManyKnots) {
   checkDistance(d, 1.0f, 6.0f, 1);
 }
 
+// The knots' integral is the unnormalised density's: trapezoids between knots, flat beyond them.
+TEST(PiecewiseLinear, KnotsIntegralIsTheDensitysArea) {
+  const std::vector<DistanceKnot> knots{{1.0f, 2.0f}, {3.0f, 4.0f}, {4.0f, 0.0f}};
+  // [0, 1] at 2, trapezoids 6 and 2, [4, 6] at 0.
+  EXPECT_DOUBLE_EQ(knotsIntegral(knots, 0.0f, 6.0f), 2.0 + 6.0 + 2.0);
+  EXPECT_DOUBLE_EQ(knotsIntegral({}, 0.0f, 6.0f), 0.0);
+  EXPECT_DOUBLE_EQ(knotsIntegral({{2.0f, 3.0f}}, 1.0f, 5.0f), 12.0);
+}
+
 TEST(PiecewiseLinear, ZeroKnotsIsUniform) {
   std::vector<DistanceKnot> knots;
   PiecewiseLinearDistance d;
@@ -330,6 +339,49 @@ TEST(Guiding, RaysWhoseProbesCarryNoLightAreLeftToTracking) {
   EXPECT_GT(guidedRays, 50) << "and smoke lit by the flame";
 }
 
+// Pixels whose probes predict less light than dim_pixel_floor x the image's mean prediction have no
+// table (their camera rays are left to tracking); the others keep theirs. On fire at 0.05, about
+// two in five of the pixels whose rays cross the lit smoke's box are that dim.
+TEST(CameraGuides, DimPixelsAreLeftToTracking) {
+  auto scene = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"full\"", "camera.resolution=[48,48]"}));
+  ASSERT_EQ(scene->strategy().guiding.dim_pixel_floor, 0.05f) << "the default";
+  const PathTracer tracer(*scene);
+  CameraGuides cache;
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  double sum = 0.0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) sum += cache.predictedLight(x, y);
+  EXPECT_NEAR(cache.dimThreshold(), 0.05 * sum / (48 * 48), 1e-4 * cache.dimThreshold());
+  size_t dim = 0, kept = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      const float light = cache.predictedLight(x, y);
+      const bool hasTable = cache.at(x, y)->table != nullptr;
+      if (light <= 0.0f) {
+        EXPECT_FALSE(hasTable) << x << "," << y;
+        continue;
+      }
+      EXPECT_EQ(hasTable, light >= cache.dimThreshold()) << x << "," << y << " predicts " << light;
+      if (!hasTable) {
+        EXPECT_EQ(cache.at(x, y)->guidedProbability, 0.0f);
+      }
+      dim += !hasTable, kept += hasTable;
+    }
+  EXPECT_EQ(dim, cache.dimPixels());
+  EXPECT_GT(dim, (dim + kept) / 5) << "fire's box has dim smoke";
+  EXPECT_GT(kept, (dim + kept) / 5) << "and smoke lit by the flame";
+
+  // Floor 0: every pixel whose probes carry light keeps its table.
+  auto unfloored = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"full\"", "camera.resolution=[48,48]",
+                                                                           "strategy.guiding.dim_pixel_floor=0"}));
+  const PathTracer tracer0(*unfloored);
+  CameraGuides all;
+  ASSERT_TRUE(all.prepare(*unfloored, tracer0, unfloored->camera()));
+  EXPECT_EQ(all.dimPixels(), 0u);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) EXPECT_EQ(all.at(x, y)->table != nullptr, all.predictedLight(x, y) > 0.0f) << x << "," << y;
+}
+
 // A pixel's cached camera-ray table gives the same density as building it for the pixel's centre
 // ray (mapped onto the ray's medium interval), so the cache changes cost, never the sampling.
 TEST(CameraGuides, TablesEqualPerRayDensities) {
@@ -348,8 +400,10 @@ TEST(CameraGuides, TablesEqualPerRayDensities) {
       float tIn, tOut;
       const bool guided = tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, direct);
       const CameraRayGuide* pixel = cache.at(x, y);
-      ASSERT_EQ(guided, pixel->table != nullptr) << x << "," << y;
-      if (!guided) {
+      // Dim pixels are left to tracking (CameraGuides.DimPixelsAreLeftToTracking).
+      const bool dim = cache.predictedLight(x, y) < cache.dimThreshold();
+      ASSERT_EQ(guided && !dim, pixel->table != nullptr) << x << "," << y;
+      if (!pixel->table) {
         EXPECT_EQ(pixel->guidedProbability, 0.0f) << "no table, no guided sample";
         continue;
       }
