@@ -65,6 +65,7 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
     r.mixtureProbability = options.guided_probability >= 0.0f ? options.guided_probability
                            : segment == 0                     ? settings.guided_probability
                                                               : settings.secondary_probability;
+  if (!r.guided) r.mixtureProbability = 0.0;  // the strategy draws from the tracked density alone
   r.tIn = tIn;
   r.tOut = tOut;
   const int n = std::max(8, options.bins);

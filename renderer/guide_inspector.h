@@ -47,7 +47,7 @@ struct GuideInspection {
   int segment = 0;                // 0: the camera ray; 1: the secondary ray
   float tIn = 0.0f, tOut = 0.0f;  // the ray's medium interval (empty: the ray misses every medium)
   bool guided = false;            // the strategy would draw a guided sample on this ray
-  double mixtureProbability = 0.5;  // the guided technique's share in misPdf (q under one-sample MIS)
+  double mixtureProbability = 0.5;  // the guided technique's share in misPdf (q under one-sample MIS; 0 unguided)
   std::string note;               // why not, when it would not
   double opticalDepth = 0.0;      // int mu_t over [tIn, tOut]
   std::vector<double> t, f, ideal, guidedPdf, trackedPdf, misPdf, transmittance, sigmaS, inScattered;

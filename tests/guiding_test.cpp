@@ -368,6 +368,20 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
       dim += !hasTable, kept += hasTable;
     }
   EXPECT_EQ(dim, cache.dimPixels());
+  // The guide inspector says so for a dim pixel, and its MIS curve is the tracked density alone.
+  for (int y = 0, shown = 0; y < 48 && !shown; ++y)
+    for (int x = 0; x < 48 && !shown; ++x) {
+      if (cache.at(x, y)->table || !(cache.predictedLight(x, y) > 0.0f)) continue;
+      GuideInspectOptions options;
+      options.bins = 16;
+      options.light_samples = 2;
+      const GuideInspection r = inspectGuide(*scene, x, y, options);
+      EXPECT_FALSE(r.guided) << x << "," << y;
+      EXPECT_NE(r.note.find("dim_pixel_floor"), std::string::npos) << r.note;
+      EXPECT_EQ(r.mixtureProbability, 0.0);
+      for (size_t i = 0; i < r.t.size(); ++i) EXPECT_EQ(r.misPdf[i], r.trackedPdf[i]) << i;
+      shown = 1;
+    }
   EXPECT_GT(dim, (dim + kept) / 5) << "fire's box has dim smoke";
   EXPECT_GT(kept, (dim + kept) / 5) << "and smoke lit by the flame";
 
