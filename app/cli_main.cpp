@@ -98,11 +98,17 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
     writeImage(out, image);
   if (!quiet) {
     const double paths = static_cast<double>(film.spp()) * film.width() * film.height();
+    // Auto is charged its pilot, as bench charges it: the pilot's work over every sample in the
+    // image (the pilot's kept samples included), so relative variance x work compares it with a
+    // preset per sample.
+    const AutoDecision* decision = scene->autoDecision();
+    const double work = renderer.work().cost() + (decision ? decision->pilotWork : 0.0);
+    const double samples = decision ? paths : static_cast<double>(renderer.work().samples);
     std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples, "
-                "relative variance per sample %.4g, variance per sample %.4g, work per sample %.4g\n",
+                "relative variance per sample %.4g, variance per sample %.4g, work per sample %.4g%s\n",
                 scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
                 paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()), relativeVariancePerSample(film),
-                variancePerSample(film), renderer.work().cost() / std::max(1.0, static_cast<double>(renderer.work().samples)));
+                variancePerSample(film), work / std::max(1.0, samples), decision ? " (the pilot's included)" : "");
     // Where the work went, per camera sample (CANDELA_VERBOSE): the counts work.h prices.
     if (std::getenv("CANDELA_VERBOSE")) {
       const WorkCounters& w = renderer.work();

@@ -102,7 +102,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   } else {
     // Absorption weighted at every collision instead of ending the path (docs/method.md s.2): no
     // emission structure, and measured at or above the analog walk on every report scene without
-    // emission (README, "The auto strategy").
+    // emission (docs/performance.md, "The auto strategy").
     base.emission.gather_every_collision = true;
     reasons.push_back("no volume emits: no emission sampling, absorption weighted at every collision");
   }
@@ -140,7 +140,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     // 3-3.5x on god-rays-dark and 2x on god-rays-backlit for 12-20% more time, and cost 6-8% on
     // the side-lit god-rays. Where volumes emit, the guided vertex's light sample of the emissive
     // volumes made it cost 14-29% more time for the same MSE (torch-in-mist, torch-in-fog, fire).
-    // README, "Guided continuations".
+    // docs/performance.md, "Guided continuations".
     full.guiding.guided_segments = 2;
     full.guiding.secondary_rays = SecondaryRays::FromMedia;
     full.guiding.secondary_probability = 1.0f;
@@ -154,7 +154,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     // density bounds: an 8-spp pilot seldom draws them (fire: emission 0.20 against full 0.18 per
     // sample at 8 spp, 1.19 against 0.62 at 64), while the bench at 8 s puts full x1.35-1.46 ahead by
     // relMSE and x0.92-0.95 by MSE on torch-in-mist and fire, and no less than x0.92 by either
-    // metric on torch-in-fog and shed-fire (README, "The auto strategy").
+    // metric on torch-in-fog and shed-fire (docs/performance.md, "The auto strategy").
     out.front().standing = false;
     out.back().standing = true;
     reasons.push_back("volumes emit into thin media: full stands unless the pilot puts another candidate " + marginPercent() + " ahead");

@@ -97,7 +97,7 @@ struct AutoDecision {
 };
 
 // The emission weight auto uses, relative to each medium's emission scale (relative_weight): the
-// value the per-sample sweep in README ("The auto strategy") puts within 3% (relMSE) and 9% (MSE) of the
+// value the per-sample sweep in docs/performance.md ("The auto strategy") puts within 3% (relMSE) and 9% (MSE) of the
 // best on fire, glow-box, torch-in-mist and torch-in-fog.
 inline constexpr float kAutoRelativeEmissionWeight = 10.0f;
 // Camera samples per candidate image in the pilot (128 x 72 x 8): an image of at most this many

@@ -85,22 +85,26 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   dimPixels_ = 0;
   for (size_t i = 0; i < pixels; ++i)
     if (present_[i] && predicted_[i] < dimThreshold_) present_[i] = 0, guides_[i].guidedProbability = 0.0f, ++dimPixels_;
+  // One flat array of the kept pixels' tables (a dim pixel's was built with its prediction, then
+  // dropped here) and the views into it.
   size_t total = 0;
-  for (const auto& r : rows) total += r.size();
+  for (size_t i = 0; i < pixels; ++i)
+    if (present_[i]) total += 3 * static_cast<size_t>(views_[i].n);
   data_.clear();
   data_.reserve(total);
   for (int y = 0; y < height_; ++y) {
-    const size_t base = data_.size();
     const auto& row = rows[static_cast<size_t>(y)];
-    data_.insert(data_.end(), row.begin(), row.end());
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!present_[i]) continue;
       PiecewiseLinearView& v = views_[i];
-      const float* start = data_.data() + base + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
-      v.ts = start;
-      v.vs = start + v.n;
-      v.cdf = start + 2 * v.n;
+      const size_t n = static_cast<size_t>(v.n);
+      const auto from = row.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<size_t>(y)][static_cast<size_t>(x)]);
+      const size_t start = data_.size();
+      data_.insert(data_.end(), from, from + static_cast<std::ptrdiff_t>(3 * n));
+      v.ts = data_.data() + start;
+      v.vs = v.ts + n;
+      v.cdf = v.ts + 2 * n;
       guides_[i].table = &v;
     }
   }

@@ -45,7 +45,7 @@ bool PathTracer::guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, G
     // unlit) is left to tracking, as a thick one is: its guided density would be the floor alone,
     // a vertex drawn uniformly where no light scatters. Again a choice by the ray alone. On fire,
     // whose box is mostly empty around the flame, this cut full's work per sample by 2% for the
-    // same variance (README, "Rays whose probes carry no light").
+    // same variance (docs/performance.md, "Rays whose probes carry no light").
     if (!knotsCarryLight(out.knots)) return false;
     out.buildPiecewiseLinear(tIn, tOut, g.floor);
   }

@@ -20,20 +20,21 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
     s.emission.gather_every_collision = true;
     s.emission.light_sampling = true;
     // Continuations aimed at the emissive volumes reach the glow a flame lights around it
-    // (docs/method.md s.3b; measured in README, "Continuations toward emissive volumes").
+    // (docs/method.md s.3b; measured in docs/performance.md, "Continuations toward emissive volumes").
     s.emission.continuation_toward_volumes = 0.25f;
     // Talk s.2.2: plus probe-guided distance sampling with MIS (the talk's Fig. 1 right), or the
     // equi-angular baseline in the same MIS slot.
     if (name == "full") {
       s.guiding.guide = DistanceGuide::Probes;
       // One vertex per guided segment: measured ahead of two balance-weighted vertices at equal
-      // time on every report scene where guiding runs (README, "Scattering sampling").
+      // time on every report scene where guiding runs (docs/performance.md,
+      // "Scattering sampling: one vertex per guided segment").
       s.guiding.combination = GuideCombination::OneSample;
       // The guided vertex on one segment in ten: a defensive share of the one-sample mixture. Its
       // density still bounds the MIS weight where tracking rarely scatters (dim smoke lit by a hot
       // core, mist beside shafts), while nine segments in ten cost what tracking costs. Against
       // q = 0.5, measured ahead by relMSE on every report scene where guiding runs and by MSE on all
-      // but the sun shafts (README, "Scattering sampling: how often the guided vertex").
+      // but the sun shafts (docs/performance.md, "Scattering sampling: how often the guided vertex").
       s.guiding.guided_probability = 0.1f;
     }
     if (name == "equiangular") s.guiding.guide = DistanceGuide::EquiAngular;

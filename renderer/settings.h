@@ -123,7 +123,7 @@ struct EnumNames<GuidedVertex> {
 // Which rays after the camera ray get a guided sample when guided_segments > 1. from_media: only rays
 // leaving a scattering vertex in a medium; rays leaving a surface are left to tracking. On
 // god-rays-dark guiding the rays from surfaces too (most later rays: camera rays in thin haze mostly
-// reach the ground) made the render 1.75x as long as from_media's for the same variance (README,
+// reach the ground) made the render 1.75x as long as from_media's for the same variance (docs/performance.md,
 // "Guided continuations").
 enum class SecondaryRays { All, FromMedia };
 template <>
@@ -145,7 +145,7 @@ struct GuidingSettings {
   SecondaryRays secondary_rays = SecondaryRays::FromMedia;  // guided_segments > 1: which later rays
   // one_sample, guided_segments > 1: q on the rays after the camera ray. 1 (the guided vertex on
   // every such segment): the tracked vertex there is the rare event guiding exists to replace (a
-  // vertex landing in a thin sun shaft), and the density is built whatever q is (README, "Guided
+  // vertex landing in a thin sun shaft), and the density is built whatever q is (docs/performance.md, "Guided
   // continuations").
   float secondary_probability = 1.0f;
   float floor = 0.1f;             // uniform share of the piecewise-linear density (full support)
@@ -160,7 +160,7 @@ struct GuidingSettings {
   // Camera rays of pixels whose probes predict less single-scattered light than this fraction of
   // the mean prediction over the image are left to tracking (camera_guides.h): on fire, 40% of the
   // guided pixels see next to nothing, and guiding them was 3.4% of the work for 6% of the relative
-  // variance and none of the variance (README, "Dim pixels"). 0: guide every pixel whose probes
+  // variance and none of the variance (docs/performance.md, "Dim pixels"). 0: guide every pixel whose probes
   // carry light.
   float dim_pixel_floor = 0.05f;
 

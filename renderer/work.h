@@ -42,7 +42,7 @@ struct WorkCounters {
     return d;
   }
   // The cost in nanoseconds of one core of the calibration machine: constants fitted once by least
-  // squares against render time (candela-cli calibrate, README "The auto strategy"); never the clock.
+  // squares against render time (candela-cli calibrate, docs/performance.md, "The auto strategy"); never the clock.
   double cost() const;
 };
 
