@@ -167,6 +167,19 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   StrategySettings often = full;
   often.guiding.guided_probability = kAutoOftenGuidedProbability;
   out.push_back({kAutoOftenGuidedName, often});
+  // Equi-angular sampling aims at a point: a point, spot or sphere light, or an emissive volume's
+  // emission centroid (PathTracer's targets). Without one its slot holds a uniform density over the
+  // ray's medium interval, which on the god-rays scenes measured x0.55-0.70 of conventional by
+  // relMSE per unit of work, so it can never be the candidate that is nowhere far behind; on a
+  // 48 x 27 god-rays its 10-thousand-sample pilot still put it ahead on one seed in eight, at x0.75
+  // of conventional (docs/performance.md, "Auto against conventional on the stability cases").
+  bool aimable = emissive;
+  for (const Light& l : scene.lights())
+    aimable |= l.type() == LightType::Point || l.type() == LightType::Spot || l.type() == LightType::Sphere;
+  if (!aimable) {
+    reasons.push_back("no point, spot or sphere light and no emissive volume: equiangular has nothing to aim at, no candidate");
+    return out;
+  }
   StrategySettings equi = base;
   equi.guiding.guide = DistanceGuide::EquiAngular;
   out.push_back({"equiangular", equi});
@@ -367,11 +380,13 @@ AutoDecision decide(Scene& scene) {
       candidates.push_back(c);
       d.pilot.push_back(measure(c, nullptr, images.emplace_back()));
     }
-    if (!skipped.empty()) {
+    if (!fullAhead) {
+      std::string line = std::string(fullAheadSomewhere ? "full behind " : "full behind in every region of ") + candidates[0].name +
+                         " in the first round";
       std::string names;
       for (const std::string& n : skipped) names += (names.empty() ? "" : " and ") + n;
-      d.reasons.push_back(std::string(fullAheadSomewhere ? "full behind " : "full behind in every region of ") + candidates[0].name +
-                          " in the first round: " + names + " not tried");
+      if (!names.empty()) line += ": " + names + " not tried";
+      d.reasons.push_back(line);
     }
   }
   // "full, by region": per region the q of the map above (regions differ: a fire beside god rays
