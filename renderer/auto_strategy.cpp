@@ -174,8 +174,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   // 48 x 27 god-rays its 10-thousand-sample pilot still put it ahead on one seed in eight, at x0.75
   // of conventional (docs/performance.md, "Auto against conventional on the stability cases").
   bool aimable = emissive;
-  for (const Light& l : scene.lights())
-    aimable |= l.type() == LightType::Point || l.type() == LightType::Spot || l.type() == LightType::Sphere;
+  for (const Light& l : scene.lights()) aimable |= l.hasPosition();
   if (!aimable) {
     reasons.push_back("no point, spot or sphere light and no emissive volume: equiangular has nothing to aim at, no candidate");
     return out;

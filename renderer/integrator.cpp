@@ -21,7 +21,7 @@ Vec3 sampleCosineHemisphere(Vec2 u) {
 PathTracer::PathTracer(const Scene& scene) : scene_(scene), probes_(scene.probes()) {
   // Equi-angular targets: point-like lights, and each emissive volume's emission centroid.
   for (const Light& l : scene.lights())
-    if (l.type() == LightType::Point || l.type() == LightType::Spot || l.type() == LightType::Sphere)
+    if (l.hasPosition())
       equiAngularTargets_.push_back({l.desc().position, l.power(scene.radius())});
   for (const EmissionLight* v : scene.volumeLights()) equiAngularTargets_.push_back({v->centroid(), v->power()});
 }

@@ -36,6 +36,8 @@ class Light {
   const LightDesc& desc() const { return desc_; }
   LightType type() const { return desc_.type; }
   bool isDelta() const { return desc_.type == LightType::Point || desc_.type == LightType::Spot || desc_.type == LightType::Directional; }
+  // A light with a position that equi-angular sampling can aim at (point, spot, sphere).
+  bool hasPosition() const { return desc_.type == LightType::Point || desc_.type == LightType::Spot || desc_.type == LightType::Sphere; }
   // Samples a direction from `p` toward the light; false when it contributes nothing.
   bool sample(const Vec3& p, Vec2 u, LightSample& out) const;
   // Solid-angle pdf of sample() producing direction wi from p (0 for delta lights).
