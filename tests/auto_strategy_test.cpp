@@ -126,6 +126,32 @@ TEST(AutoStrategy, FullStandsWhereVolumesEmitIntoThinMedia) {
   }
 }
 
+// Guided continuations (the rays leaving a medium vertex guided too) where shafts of a sun or
+// no emission make them pay: shed-fire's sun beside its campfire, god-rays-dark; not where flames
+// are the only concentrated light (torch-in-mist, fire), whose glow the continuations aimed at the
+// volumes reach and whose light samples make a guided later vertex dear.
+TEST(AutoStrategy, GuidedContinuationsWhereASunOrNoEmissionMakesShafts) {
+  for (const auto& [name, continued] : std::vector<std::pair<const char*, bool>>{
+           {"shed-fire", true}, {"god-rays-dark", true}, {"torch-in-mist", false}, {"fire", false}}) {
+    const auto scene = Scene::build(test::loadScene(std::string("assets/scenes/") + name + ".json", {"camera.resolution=[32,18]"}));
+    std::vector<std::string> reasons;
+    const std::vector<AutoCandidate> candidates = autoCandidates(*scene, reasons);
+    int guided = 0;
+    for (const AutoCandidate& c : candidates) {
+      if (c.strategy.guiding.guide != DistanceGuide::Probes) continue;
+      ++guided;
+      EXPECT_EQ(c.strategy.guiding.guided_segments, continued ? 2 : 1) << name << ": " << c.name;
+      if (continued) {
+        EXPECT_EQ(c.strategy.guiding.secondary_rays, SecondaryRays::FromMedia) << name;
+      }
+    }
+    EXPECT_GE(guided, 2) << name;
+    bool said = false;
+    for (const std::string& r : reasons) said |= r.find("guide the rays leaving a medium vertex") != std::string::npos;
+    EXPECT_EQ(said, continued) << name;
+  }
+}
+
 // Every candidate, guided or not, weights absorption at every collision as the full preset does,
 // in a scene without emission too.
 TEST(AutoStrategy, EveryCandidateGathersAtEveryCollision) {
