@@ -149,8 +149,8 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     full.guiding.guided_segments = 2;
     full.guiding.secondary_rays = SecondaryRays::FromMedia;
     full.guiding.secondary_probability = 1.0f;
-    reasons.push_back(emissive ? "a sun shines into the media: guided candidates guide the rays leaving a medium vertex too"
-                               : "no volume emits: guided candidates guide the rays leaving a medium vertex too");
+    reasons.push_back(std::string(emissive ? "a sun shines into the media" : "no volume emits") +
+                      ": guided candidates guide the rays leaving a medium vertex too");
   }
   out.push_back({"full", full});
   if (emissive) {
