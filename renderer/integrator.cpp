@@ -315,6 +315,15 @@ struct PathTracer::SegmentWalk {
   float scatterG = 0.0f, scatterT = 0.0f;
   float nullProbability = 1.0f;  // prod of P_null over the walk's null collisions (for MIS)
   float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering (for MIS)
+  // The walk's tentative collisions cover (0, coveredT]: the segment's end when it went through,
+  // else the collision where it stopped (kept in the walk's record on guided segments).
+  float coveredT = 0.0f;
+};
+
+// One tentative collision of a guided segment's tracked walk: the guided sample reads its null
+// collisions on [0, t) off these instead of walking them again (docs/method.md s.4).
+struct PathTracer::WalkCollision {
+  float t, sigmaS, sigmaN, muBar;
 };
 
 namespace {
@@ -413,14 +422,18 @@ int scatteringMedium(const Collision& c, float pick) {
 
 }  // namespace
 
-PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const {
+PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool guided, std::vector<WalkCollision>* record, float emissionWeight,
+                                                Rgb& L, Rng& rng) const {
   const bool gather = scene_.strategy().emission.gather_every_collision;
   const bool emissive = scene_.hasEmissiveMedia();
   const bool perLength = scene_.hasPerLengthEmission();
+  if (record) record->clear();
   SegmentWalk walk;
   GatherRoulette roulette;
-  trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
+  const bool through = trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
     const CollisionCoefficients k(c);
+    walk.coveredT = c.t;
+    if (record) record->push_back({c.t, k.sigmaS, k.sigmaN, c.muBar});
     const float u = rng.uniform();
     float pick = 0.0f;
     const Decision d = gather ? gatherEvent(c, k, u, emissive, emissionWeight, guided, st.beta, L, roulette, walk.nullProbability,
@@ -441,6 +454,7 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
     walk.event = SegmentWalk::Event::Scattered;
     return false;
   });
+  if (through) walk.coveredT = tEnd;
   return walk;
 }
 
@@ -468,7 +482,8 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   return guideFor(st.ray, tEnd, tIn, tOut, guide);
 }
 
-Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, Rng& rng) const {
+Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, const std::vector<WalkCollision>& walked, float walkedT,
+                             Rng& rng) const {
   ++threadWork().guided;
   const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
@@ -479,17 +494,34 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   // estimator's transmittance, `nullProbability` what the tracked technique would have paid.
   float ratio = 1.0f, nullProbability = 1.0f;
   GatherRoulette roulette;  // replayed, not drawn: the tracked walk's survival probabilities
-  trackCollisions(s.media(), st.ray, t, rng, [&](const Collision& c) {
-    const CollisionCoefficients k(c);
-    ratio *= k.sigmaN / c.muBar;
+  auto nullCollision = [&](float sigmaS, float sigmaN, float muBar) {
+    ratio *= sigmaN / muBar;
     if (gather) {
-      const float kept = k.sigmaS + k.sigmaN;
-      nullProbability *= kept > 0.0f ? k.sigmaN / kept * roulette.survival(kept / c.muBar) : 0.0f;
+      const float kept = sigmaS + sigmaN;
+      nullProbability *= kept > 0.0f ? sigmaN / kept * roulette.survival(kept / muBar) : 0.0f;
     } else {
-      nullProbability *= k.sigmaN / c.muBar;
+      nullProbability *= sigmaN / muBar;
     }
     return ratio > 0.0f;
-  });
+  };
+  // The segment's tracked walk already drew tentative collisions at rate mu_bar over (0, walkedT]:
+  // those before t are this sample's, and past walkedT (where the walk stopped) fresh ones continue
+  // the same Poisson process, which is memoryless. The collisions on [0, t) are thus distributed as
+  // a walk of their own would draw them, independently of t, so the guided estimate keeps its
+  // expectation; it only becomes correlated with the tracked one. On fire this removed most of a
+  // guided vertex's cost, the re-walk of the camera ray (docs/performance.md, "The guided vertex
+  // reuses the tracked walk's collisions").
+  for (const WalkCollision& c : walked) {
+    if (!(c.t < t)) break;
+    if (!nullCollision(c.sigmaS, c.sigmaN, c.muBar)) return Rgb(0.0f);
+  }
+  if (t > walkedT) {
+    const Ray rest{st.ray.at(walkedT), st.ray.direction};
+    trackCollisions(s.media(), rest, t - walkedT, rng, [&](const Collision& c) {
+      const CollisionCoefficients k(c);
+      return nullCollision(k.sigmaS, k.sigmaN, c.muBar);
+    });
+  }
   if (!(ratio > 0.0f)) return Rgb(0.0f);
   // The scattering vertex at t.
   const Vec3 p = st.ray.at(t);
@@ -513,37 +545,41 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, R
   return L;
 }
 
-namespace {
-// A segment's guided density, reused by the next path this thread traces at the same recursion
-// level (a continuing guided vertex traces its own path one level down). Its vectors keep their
-// capacity, so a path whose secondary segments build densities from probe knots
-// (guided_segments > 1) allocates nothing once warm: fresh densities per path spent about a tenth of
-// such a render in malloc and free. Every use rebuilds the density (prepareGuide) before reading it,
-// so nothing carries from one path to the next but capacity.
-class ReusedGuide {
+// A segment's guided density and its tracked walk's collisions, reused by the next path this
+// thread traces at the same recursion level (a continuing guided vertex traces its own path one
+// level down). Their vectors keep their capacity, so a path whose secondary segments build
+// densities from probe knots (guided_segments > 1) allocates nothing once warm: fresh densities per
+// path spent about a tenth of such a render in malloc and free. Every use rebuilds them
+// (prepareGuide, walkSegment) before reading them, so nothing carries from one path to the next but
+// capacity.
+class PathTracer::SegmentScratch {
  public:
-  ReusedGuide() {
+  SegmentScratch() {
     Pool& pool = threadPool();
-    if (pool.depth == pool.guides.size()) pool.guides.push_back(std::make_unique<GuidedDistance>());
-    guide_ = pool.guides[pool.depth++].get();
+    if (pool.depth == pool.buffers.size()) pool.buffers.push_back(std::make_unique<Buffers>());
+    buffers_ = pool.buffers[pool.depth++].get();
   }
-  ~ReusedGuide() { --threadPool().depth; }
-  ReusedGuide(const ReusedGuide&) = delete;
-  ReusedGuide& operator=(const ReusedGuide&) = delete;
-  GuidedDistance& get() { return *guide_; }
+  ~SegmentScratch() { --threadPool().depth; }
+  SegmentScratch(const SegmentScratch&) = delete;
+  SegmentScratch& operator=(const SegmentScratch&) = delete;
+  GuidedDistance& guide() { return buffers_->guide; }
+  std::vector<WalkCollision>& walked() { return buffers_->walked; }
 
  private:
+  struct Buffers {
+    GuidedDistance guide;
+    std::vector<WalkCollision> walked;
+  };
   struct Pool {
-    std::vector<std::unique_ptr<GuidedDistance>> guides;
+    std::vector<std::unique_ptr<Buffers>> buffers;
     size_t depth = 0;
   };
   static Pool& threadPool() {
     thread_local Pool pool;
     return pool;
   }
-  GuidedDistance* guide_ = nullptr;
+  Buffers* buffers_ = nullptr;
 };
-}  // namespace
 
 Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng) const {
   const Scene& s = scene_;
@@ -552,8 +588,8 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
   const int maxDepth = s.render().max_depth;
   const bool volumeNee = !s.volumeLights().empty();
   const bool needTail = s.hasEmissiveMedia() && !volumeNee;
-  ReusedGuide reusedGuide;  // this path's segment density (a continuing guided vertex traces its own)
-  GuidedDistance& guide = reusedGuide.get();
+  SegmentScratch scratch;  // this path's segment buffers (a continuing guided vertex traces its own)
+  GuidedDistance& guide = scratch.guide();
   Rgb L(0.0f);
 
   for (;;) {
@@ -578,7 +614,12 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     // segment's start, before the walk changes the state.
     const bool guided = prepareGuide(st, tEnd, cameraGuide, guide);
     const PathState segmentStart = guided ? st : PathState{};
-    const SegmentWalk walk = walkSegment(st, tEnd, guided, emissionWeight, L, rng);
+    // With one-sample MIS the guided vertex reads its null collisions off the tracked walk's
+    // (guidedSample). With two vertices per segment (balance, power, average) it draws its own: both
+    // vertices' light samples estimate the same in-scattering, and on shared collisions they err
+    // together (equiangular on point-in-mist: 20% less work, 40-75% more variance per sample).
+    const bool shareWalk = guided && strategy.guiding.combination == GuideCombination::OneSample;
+    const SegmentWalk walk = walkSegment(st, tEnd, guided, shareWalk ? &scratch.walked() : nullptr, emissionWeight, L, rng);
 
     // The tracked scattering's MIS weight on a guided segment (docs/method.md s.4): on its NEE only in
     // guided_vertex = direct (the continuation is the tracked technique's alone, unweighted), or
@@ -604,7 +645,10 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
           trackedDirect = trackedWeight;
         }
       }
-      if (guidedPicked) L += guidedSample(segmentStart, guide, rng);
+      if (guidedPicked) {
+        if (!shareWalk) scratch.walked().clear();  // a walk of its own from the segment's start
+        L += guidedSample(segmentStart, guide, scratch.walked(), shareWalk ? walk.coveredT : 0.0f, rng);
+      }
     }
     if (walk.event == SegmentWalk::Event::Absorbed) break;
 

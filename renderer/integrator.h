@@ -94,13 +94,18 @@ class PathTracer {
     bool fromMedium = false;   // `ray` leaves a scattering vertex in a medium (not a surface or the camera)
   };
   struct SegmentWalk;  // what the tracked walk of one segment found (integrator.cpp)
+  struct WalkCollision;  // one tentative collision of a guided segment's tracked walk (integrator.cpp)
+  class SegmentScratch;  // a path's reused per-segment buffers (integrator.cpp)
 
   // Follows a path from its current ray to the end; returns the radiance it gathers. The camera
   // ray's guided density comes from `cameraGuide` when given.
   Rgb trace(PathState state, const CameraRayGuide* cameraGuide, Rng& rng) const;
   // The tracked walk along one segment (docs/method.md s.2): the one tracking loop with the strategy's
   // event probabilities (analogEvent or gatherEvent) as its collision callback. Adds emission to L.
-  SegmentWalk walkSegment(PathState& state, float tEnd, bool guided, float emissionWeight, Rgb& L, Rng& rng) const;
+  // On a guided segment the walk also replays the tracked pdf's null factors, and `record`, when
+  // given, receives its tentative collisions for the segment's guided sample.
+  SegmentWalk walkSegment(PathState& state, float tEnd, bool guided, std::vector<WalkCollision>* record, float emissionWeight, Rgb& L,
+                          Rng& rng) const;
   // Distance-sampler choice for one segment: whether it gets a guided sample, and its density.
   bool prepareGuide(const PathState& state, float tEnd, const CameraRayGuide* cameraGuide, GuidedDistance& guide) const;
   // A medium scattering vertex at p: NEE, Russian roulette, HG sampling of the next ray. Returns
@@ -110,8 +115,10 @@ class PathTracer {
   bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f,
                      float directWeight = 1.0f) const;
   // The guided distance sample of one ray segment (docs/method.md s.4), drawn from `guide`: its
-  // vertex's direct light, and with guided_vertex = path also the path continuing from it.
-  Rgb guidedSample(const PathState& state, const GuidedDistance& guide, Rng& rng) const;
+  // vertex's direct light, and with guided_vertex = path also the path continuing from it. `walked`
+  // holds the segment's tracked walk's collisions over (0, walkedT], which it reuses.
+  Rgb guidedSample(const PathState& state, const GuidedDistance& guide, const std::vector<WalkCollision>& walked, float walkedT,
+                   Rng& rng) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
   float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
   // MIS weight of the guided technique given r = p_tracked / p_guided.

@@ -5,6 +5,9 @@
 // heuristic over both vertices and one-sample MIS in path mode all agree
 // with `conventional` on god-rays (side-lit and backlit), torch-in-mist, cloud and a point light
 // inside the medium, with the scattering medium's g = 0, 0.9 and -0.9 (docs/method.md s.5).
+// The one-sample variants (full, continuations, dim pixels, path at q = 0.8) read the guided
+// vertex's null collisions off the segment's tracked walk and draw fresh ones past its stop (s.4);
+// the cloud, where guiding is forced onto thick rays, has most of its guided vertices past the stop.
 // Power (checked by injecting a bias into the guided sample's weight in integrator.cpp): a 5% bias
 // in the guided contribution fails point-in-mist (z up to 5.7 against a threshold of 4.1), where
 // in-scattering from the guided segment dominates the pixels. On god-rays the floor and walls carry
