@@ -618,7 +618,11 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     // (guidedSample). With two vertices per segment (balance, power, average) it draws its own: both
     // vertices' light samples estimate the same in-scattering, and on shared collisions they err
     // together (equiangular on point-in-mist: 20% less work, 40-75% more variance per sample).
-    const bool shareWalk = guided && strategy.guiding.combination == GuideCombination::OneSample;
+    // One-sample MIS picks its vertex before the walk, so only a segment whose guided vertex is
+    // drawn keeps the walk's collisions.
+    const bool oneSample = strategy.guiding.combination == GuideCombination::OneSample;
+    const bool guidedPicked = guided && (!oneSample || rng.uniform() < guide.guidedProbability);
+    const bool shareWalk = guidedPicked && oneSample;
     const SegmentWalk walk = walkSegment(st, tEnd, guided, shareWalk ? &scratch.walked() : nullptr, emissionWeight, L, rng);
 
     // The tracked scattering's MIS weight on a guided segment (docs/method.md s.4): on its NEE only in
@@ -628,10 +632,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     // With one-sample MIS only one of the two vertices counts: the guided one with probability q.
     float trackedDirect = 1.0f, trackedContinue = 1.0f;
     if (guided) {
-      const GuidingSettings& gs = strategy.guiding;
-      const bool oneSample = gs.combination == GuideCombination::OneSample;
       const float q = guide.guidedProbability;
-      const bool guidedPicked = !oneSample || rng.uniform() < q;
       if (walk.event == SegmentWalk::Event::Scattered) {
         const float pg = guide.pdf(walk.scatterT);
         const float pt = walk.nullProbability * walk.scatterDensity;

@@ -10,7 +10,11 @@
 // preset (no equi-angular sampling). Its next-event estimate has infinite variance (1/d^2 at the
 // light with transmittance-proportional distances), so its standard error does not shrink as
 // 1/sqrt(N): 4.8% at 1024 spp, 4.5% at 6144. That is the failure this case exists to show;
-// equi-angular (full 1.6%, equiangular 1.9%) removes it.
+// equi-angular sampling (equiangular 1.7-1.9%) removes it. The `full` preset shares it: its
+// probe-guided vertex is drawn on one camera segment in ten (one-sample MIS), and on the other nine
+// the tracked vertex takes that same next-event estimate. Its detectable bias moves with the random
+// stream, 1.6-2.4% (its variance per sample over seeds 1-12 at 48x27: 0.09 to 23), as auto's does
+// when it chooses emission.
 #include "stability.h"
 #include "test_support.h"
 
@@ -47,8 +51,9 @@ TEST_P(Stability, EveryPresetAgreesWithConventionalAndTheFilmStaysFinite) {
                 c.name.c_str(), preset, r.agrees ? "yes" : "NO", r.maxAbsZ, r.threshold, 100.0 * r.detectableBias,
                 static_cast<unsigned long long>(r.rejected), r.relativeVariance, r.maxSample, r.seconds);
     EXPECT_TRUE(r.agrees) << c.name << " " << preset << ": |z| " << r.maxAbsZ << " > " << r.threshold;
-    // auto may choose emission there too.
-    const bool infiniteVariance = c.name == "point-light-inside" && (std::string(preset) == "emission" || std::string(preset) == "auto");
+    // auto may choose emission there too; full keeps the tracked vertex on nine segments in ten.
+    const std::string p = preset;
+    const bool infiniteVariance = c.name == "point-light-inside" && (p == "emission" || p == "full" || p == "auto");
     EXPECT_LT(r.detectableBias, infiniteVariance ? 0.06 : 0.02) << c.name << " " << preset << ": the test lacks the power to catch a 2% bias";
     EXPECT_EQ(r.rejected, 0u) << c.name << " " << preset;
   }
