@@ -153,17 +153,27 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
                       ": guided candidates guide the rays leaving a medium vertex too");
   }
   out.push_back({"full", full});
-  if (emissive) {
-    // Where volumes emit into thin media that scatter their light, full (the guided vertex on one
-    // camera segment in ten) stands and the plain candidate must beat it. Its gain is in rare
-    // tracked vertices (dim smoke or mist scattering a hot core's light) whose weight the guided
-    // density bounds: an 8-spp pilot seldom draws them (fire: emission 0.20 against full 0.18 per
-    // sample at 8 spp, 1.19 against 0.62 at 64), while the bench at 8 s puts full x1.35-1.46 ahead by
-    // relMSE and x0.92-0.95 by MSE on torch-in-mist and fire, and no less than x0.92 by either
-    // metric on torch-in-fog and shed-fire (docs/performance.md, "The auto strategy").
+  // Where volumes emit, full (the guided vertex on one camera segment in ten) stands and the plain
+  // candidate must beat it, unless the flames are the only concentrated light of a medium that
+  // emits nothing (below). Its gain is in rare tracked vertices (dim smoke scattering a hot core's
+  // light, haze beside a sun's shafts) whose weight the guided density bounds: an 8-spp pilot
+  // seldom draws them (fire: emission 0.20 against full 0.18 per sample at 8 spp, 1.19 against 0.62
+  // at 64; shed-fire's region map x0.74 of emission by relMSE in the pilot, x2.15 of the best preset
+  // in the bench), while nine seeds of the bench at 8 s put full x1.35 ahead of emission by relMSE
+  // and x0.94 by MSE on fire.
+  // Where a medium that emits nothing scatters the flames' light and no sun shines into it (a torch
+  // in mist or fog), the plain candidate stands, as the pilot says: nine seeds put full x0.89 /
+  // x0.81 of emission on torch-in-mist and x0.95 / x0.90 on torch-in-fog by time
+  // (docs/performance.md, "The guided vertex reuses the tracked walk's collisions").
+  bool plainScatterer = false;
+  for (const Medium* m : scene.media().media) plainScatterer |= !m->emissive() && m->albedoAverage() > 0.0f;
+  if (emissive && plainScatterer && !sunLit) {
+    reasons.push_back("the volumes light a medium that emits nothing, and no sun shines: emission stands");
+  } else if (emissive) {
     out.front().standing = false;
     out.back().standing = true;
-    reasons.push_back("volumes emit into thin media: full stands unless the pilot puts another candidate " + marginPercent() + " ahead");
+    reasons.push_back(std::string(sunLit ? "volumes emit under a sun" : "only the emitting volumes scatter") +
+                      ": full stands unless the pilot puts another candidate " + marginPercent() + " ahead");
   }
   // The guided vertex on one camera segment in two: where the probes' light is most of the image
   // (god rays' shafts) it is x1.3-1.8 ahead of full by absolute variance per sample, behind where

@@ -103,11 +103,15 @@ TEST(AutoStrategy, RefinementsOfGuidingArePilotedOnlyWhereFullIsAhead) {
 }
 
 // Exactly one candidate stands (the one the others must beat by the margin): full where volumes emit
-// into thin scattering media, the plain candidate elsewhere; and a decision that keeps the standing
-// candidate says so.
-TEST(AutoStrategy, FullStandsWhereVolumesEmitIntoThinMedia) {
-  for (const auto& [name, expected] : std::vector<std::pair<const char*, const char*>>{
-           {"torch-in-mist", "full"}, {"fire", "full"}, {"god-rays-dark", "conventional, gathering"}}) {
+// and only they scatter (fire's smoke) or a sun shines too (shed-fire), the plain candidate where the
+// flames light a medium that emits nothing with no sun (torch-in-mist) and where nothing emits; and
+// the decision says which stands.
+TEST(AutoStrategy, TheStandingCandidateFollowsWhatScattersTheLight) {
+  for (const auto& [name, expected] : std::vector<std::pair<const char*, const char*>>{{"torch-in-mist", "emission"},
+                                                                                      {"torch-in-fog", "emission"},
+                                                                                      {"fire", "full"},
+                                                                                      {"shed-fire", "full"},
+                                                                                      {"god-rays-dark", "conventional, gathering"}}) {
     const auto scene = Scene::build(test::loadScene(std::string("assets/scenes/") + name + ".json", {"camera.resolution=[32,18]"}));
     std::vector<std::string> reasons;
     const std::vector<AutoCandidate> candidates = autoCandidates(*scene, reasons);
@@ -117,8 +121,16 @@ TEST(AutoStrategy, FullStandsWhereVolumesEmitIntoThinMedia) {
       if (c.standing) ++standing, standingName = c.name;
     EXPECT_EQ(standing, 1) << name;
     EXPECT_EQ(standingName, expected) << name;
+    std::string all;
+    for (const std::string& r : reasons) all += r + "; ";
+    const std::string said = std::string(expected) == "conventional, gathering" ? "" : std::string(expected) + " stands";
+    if (said.empty()) {
+      EXPECT_EQ(all.find("stands"), std::string::npos) << name << ": " << all;  // nothing emits: the pilot's plain rule
+    } else {
+      EXPECT_NE(all.find(said), std::string::npos) << name << ": " << all;
+    }
   }
-  const auto scene = Scene::build(test::loadScene("assets/scenes/torch-in-mist.json", {"strategy.preset=\"auto\"", "camera.resolution=[96,54]"}));
+  const auto scene = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"auto\"", "camera.resolution=[48,48]"}));
   const AutoDecision* d = scene->autoDecision();
   ASSERT_NE(d, nullptr);
   EXPECT_TRUE(mentions(*d, "full stands")) << d->summary();
