@@ -46,14 +46,16 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   views_.assign(pixels, PiecewiseLinearView{});
   guides_.assign(pixels, CameraRayGuide{nullptr, 0.0f});
   present_.assign(pixels, 0);
-  // Rows in parallel, each into its own buffer; then one flat array and the views into it.
-  std::vector<std::vector<float>> rows(static_cast<size_t>(height_));
+  // Rows in parallel, each into its own buffer, which the row's views point into (a rebuild after a
+  // camera move used to copy them into one flat array as well: a fifth of its time).
+  rows_.resize(static_cast<size_t>(height_));
   std::vector<std::vector<uint32_t>> offsets(static_cast<size_t>(height_));
   predicted_.assign(pixels, 0.0f);
   tbb::parallel_for(0, height_, [&](int y) {
     GuidedDistance guide;
     PiecewiseLinearDistance unit;
-    std::vector<float>& row = rows[static_cast<size_t>(y)];
+    std::vector<float>& row = rows_[static_cast<size_t>(y)];
+    row.clear();
     offsets[static_cast<size_t>(y)].assign(static_cast<size_t>(width_), 0);
     for (int x = 0; x < width_; ++x) {
       const Ray ray = camera.generate(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
@@ -68,7 +70,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       guides_[i].guidedProbability = guidedProbabilityAt(scene, x, y, width_, height_);
       PiecewiseLinearView& stored = views_[i];
       stored = v;
-      stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into `data_` below
+      stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into the row below, once it stops growing
       offsets[static_cast<size_t>(y)][static_cast<size_t>(x)] = static_cast<uint32_t>(row.size());
       row.insert(row.end(), v.ts, v.ts + v.n);
       row.insert(row.end(), v.vs, v.vs + v.n);
@@ -85,26 +87,19 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   dimPixels_ = 0;
   for (size_t i = 0; i < pixels; ++i)
     if (present_[i] && predicted_[i] < dimThreshold_) present_[i] = 0, guides_[i].guidedProbability = 0.0f, ++dimPixels_;
-  // One flat array of the kept pixels' tables (a dim pixel's was built with its prediction, then
-  // dropped here) and the views into it.
-  size_t total = 0;
-  for (size_t i = 0; i < pixels; ++i)
-    if (present_[i]) total += 3 * static_cast<size_t>(views_[i].n);
-  data_.clear();
-  data_.reserve(total);
+  // The kept pixels' views into their rows (a dim pixel's table stays in its row, unused).
+  bytes_ = 0;
   for (int y = 0; y < height_; ++y) {
-    const auto& row = rows[static_cast<size_t>(y)];
+    const std::vector<float>& row = rows_[static_cast<size_t>(y)];
+    bytes_ += row.size() * sizeof(float);
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!present_[i]) continue;
       PiecewiseLinearView& v = views_[i];
-      const size_t n = static_cast<size_t>(v.n);
-      const auto from = row.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<size_t>(y)][static_cast<size_t>(x)]);
-      const size_t start = data_.size();
-      data_.insert(data_.end(), from, from + static_cast<std::ptrdiff_t>(3 * n));
-      v.ts = data_.data() + start;
-      v.vs = v.ts + n;
-      v.cdf = v.ts + 2 * n;
+      const float* start = row.data() + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
+      v.ts = start;
+      v.vs = start + v.n;
+      v.cdf = start + 2 * v.n;
       guides_[i].table = &v;
     }
   }

@@ -39,7 +39,7 @@ class CameraGuides {
     return &guides_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   }
   size_t bytes() const {
-    return data_.size() * sizeof(float) + views_.size() * (sizeof(PiecewiseLinearView) + sizeof(CameraRayGuide) + 1);
+    return bytes_ + views_.size() * (sizeof(PiecewiseLinearView) + sizeof(CameraRayGuide) + 1);
   }
   int builds() const { return builds_; }  // how many times the tables were (re)built
   // The probes' prediction of the light scattered along the pixel's centre ray (knotsIntegral; 0
@@ -55,7 +55,8 @@ class CameraGuides {
   std::string key_;             // what the tables depend on
   std::string probabilityKey_;  // what the pixels' q depend on
   int width_ = 0, height_ = 0;
-  std::vector<float> data_;  // every pixel's ts, vs, cdf, back to back
+  std::vector<std::vector<float>> rows_;  // per image row, each pixel's ts, vs, cdf, back to back
+  size_t bytes_ = 0;                       // the rows' tables
   std::vector<PiecewiseLinearView> views_;
   std::vector<CameraRayGuide> guides_;  // views_[i] and the pixel's q
   std::vector<char> present_;
