@@ -316,7 +316,7 @@ struct PathTracer::SegmentWalk {
   float nullProbability = 1.0f;  // prod of P_null over the walk's null collisions (for MIS)
   float scatterDensity = 0.0f;   // mu_bar(t) P_s(t) at the walk's scattering (for MIS)
   // The walk's tentative collisions cover (0, coveredT]: the segment's end when it went through,
-  // else the collision where it stopped (kept in the walk's record on guided segments).
+  // else the last recorded collision, where it stopped (set when the walk keeps a record).
   float coveredT = 0.0f;
 };
 
@@ -432,7 +432,6 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
   GatherRoulette roulette;
   const bool through = trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
     const CollisionCoefficients k(c);
-    walk.coveredT = c.t;
     if (record) record->push_back({c.t, k.sigmaS, k.sigmaN, c.muBar});
     const float u = rng.uniform();
     float pick = 0.0f;
@@ -454,7 +453,7 @@ PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool 
     walk.event = SegmentWalk::Event::Scattered;
     return false;
   });
-  if (through) walk.coveredT = tEnd;
+  if (record) walk.coveredT = through ? tEnd : record->back().t;
   return walk;
 }
 
@@ -482,7 +481,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   return guideFor(st.ray, tEnd, tIn, tOut, guide);
 }
 
-Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, const std::vector<WalkCollision>& walked, float walkedT,
+Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, const std::vector<WalkCollision>* walked, float walkedT,
                              Rng& rng) const {
   ++threadWork().guided;
   const Scene& s = scene_;
@@ -511,9 +510,13 @@ Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, c
   // expectation; it only becomes correlated with the tracked one. On fire this removed most of a
   // guided vertex's cost, the re-walk of the camera ray (docs/performance.md, "The guided vertex
   // reuses the tracked walk's collisions").
-  for (const WalkCollision& c : walked) {
-    if (!(c.t < t)) break;
-    if (!nullCollision(c.sigmaS, c.sigmaN, c.muBar)) return Rgb(0.0f);
+  if (walked) {
+    for (const WalkCollision& c : *walked) {
+      if (!(c.t < t)) break;
+      if (!nullCollision(c.sigmaS, c.sigmaN, c.muBar)) return Rgb(0.0f);
+    }
+  } else {
+    walkedT = 0.0f;  // no walk to share: a walk of its own from the segment's start
   }
   if (t > walkedT) {
     const Ray rest{st.ray.at(walkedT), st.ray.direction};
@@ -646,10 +649,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
           trackedDirect = trackedWeight;
         }
       }
-      if (guidedPicked) {
-        if (!shareWalk) scratch.walked().clear();  // a walk of its own from the segment's start
-        L += guidedSample(segmentStart, guide, scratch.walked(), shareWalk ? walk.coveredT : 0.0f, rng);
-      }
+      if (guidedPicked) L += guidedSample(segmentStart, guide, shareWalk ? &scratch.walked() : nullptr, walk.coveredT, rng);
     }
     if (walk.event == SegmentWalk::Event::Absorbed) break;
 

@@ -115,9 +115,10 @@ class PathTracer {
   bool scatterVertex(PathState& state, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability = 1.0f,
                      float directWeight = 1.0f) const;
   // The guided distance sample of one ray segment (docs/method.md s.4), drawn from `guide`: its
-  // vertex's direct light, and with guided_vertex = path also the path continuing from it. `walked`
-  // holds the segment's tracked walk's collisions over (0, walkedT], which it reuses.
-  Rgb guidedSample(const PathState& state, const GuidedDistance& guide, const std::vector<WalkCollision>& walked, float walkedT,
+  // vertex's direct light, and with guided_vertex = path also the path continuing from it. `walked`,
+  // when given, holds the segment's tracked walk's collisions over (0, walkedT], which it reuses;
+  // without it the sample walks its own null collisions from the segment's start.
+  Rgb guidedSample(const PathState& state, const GuidedDistance& guide, const std::vector<WalkCollision>* walked, float walkedT,
                    Rng& rng) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
   float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
