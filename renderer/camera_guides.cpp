@@ -43,8 +43,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   width_ = camera.width();
   height_ = camera.height();
   const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  views_.assign(pixels, PiecewiseLinearView{});
-  guides_.assign(pixels, CameraRayGuide{nullptr, 0.0f});
+  guides_.assign(pixels, CameraRayGuide{nullptr, 0.0f, PiecewiseLinearView{}});
   present_.assign(pixels, 0);
   // Rows in parallel, each into its own buffer, which the row's views point into and which keeps its
   // capacity for the next rebuild. Copied into one flat array and freed, as they were, they made a
@@ -55,7 +54,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   predicted_.assign(pixels, 0.0f);
   tbb::parallel_for(0, height_, [&](int y) {
     GuidedDistance guide;
-    PiecewiseLinearDistance unit;
+    PiecewiseLinearDistance table;
     std::vector<float>& row = rows_[static_cast<size_t>(y)];
     row.clear();
     offsets[static_cast<size_t>(y)].assign(static_cast<size_t>(width_), 0);
@@ -65,12 +64,10 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, guide)) continue;
       predicted_[i] = static_cast<float>(knotsIntegral(guide.knots, tIn, tOut));
-      const float length = std::max(tOut - tIn, 1e-7f);
-      for (DistanceKnot& k : guide.knots) k.t = (k.t - tIn) / length;
-      unit.build(0.0f, 1.0f, guide.knots, g.floor);
-      const PiecewiseLinearView v = unit.view();
+      table.build(tIn, tOut, guide.knots, g.floor);
+      const PiecewiseLinearView v = table.view();
       guides_[i].guidedProbability = guidedProbabilityAt(scene, x, y, width_, height_);
-      PiecewiseLinearView& stored = views_[i];
+      PiecewiseLinearView& stored = guides_[i].view;
       stored = v;
       stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into the row below, once it stops growing
       offsets[static_cast<size_t>(y)][static_cast<size_t>(x)] = static_cast<uint32_t>(row.size());
@@ -97,7 +94,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!present_[i]) continue;
-      PiecewiseLinearView& v = views_[i];
+      PiecewiseLinearView& v = guides_[i].view;
       const float* start = row.data() + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
       v.ts = start;
       v.vs = start + v.n;

@@ -2,10 +2,10 @@
 // distance sampling"). While the camera, the probes and the guiding settings stay put, the camera
 // rays through a pixel differ only by their sub-pixel jitter, so gathering probe knots and building
 // a piecewise-linear table for every camera sample repeats the same work. Each pixel's table is
-// built once, from its centre ray, over the unit interval of that ray's medium interval; every
-// camera ray through the pixel borrows it, mapped onto its own interval (GuidedDistance::borrow).
-// The density then depends on the ray's pixel and position alone, never on the walk, so MIS stays
-// unbiased. Any change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q
+// built once, from its centre ray, over that ray's medium interval; every camera ray through the
+// pixel shares it as it stands (GuidedDistance::share), a density in the distance t from the camera.
+// It then depends on the ray's pixel alone, never on the walk, so MIS stays unbiased; where a
+// jittered ray's interval reaches past the centre ray's, the tracked technique alone samples. Any change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q
 // (or region map of q) only refreshes each pixel's.
 #pragma once
 
@@ -39,7 +39,7 @@ class CameraGuides {
     return &guides_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   }
   size_t bytes() const {
-    return bytes_ + views_.size() * (sizeof(PiecewiseLinearView) + sizeof(CameraRayGuide) + 1);
+    return bytes_ + guides_.size() * (sizeof(CameraRayGuide) + 1);
   }
   int builds() const { return builds_; }  // how many times the tables were (re)built
   // The probes' prediction of the light scattered along the pixel's centre ray (knotsIntegral; 0
@@ -57,8 +57,7 @@ class CameraGuides {
   int width_ = 0, height_ = 0;
   std::vector<std::vector<float>> rows_;  // per image row, each pixel's ts, vs, cdf, back to back
   size_t bytes_ = 0;                       // the rows' tables
-  std::vector<PiecewiseLinearView> views_;
-  std::vector<CameraRayGuide> guides_;  // views_[i] and the pixel's q
+  std::vector<CameraRayGuide> guides_;  // each pixel's table view and q
   std::vector<char> present_;
   std::vector<float> predicted_;
   float dimThreshold_ = 0.0f;

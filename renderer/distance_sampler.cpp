@@ -132,22 +132,11 @@ void GuidedDistance::buildEquiAngular(const Ray& ray, float t0, float t1, const 
   equiAngular_.build(ray, t0, t1, targets);
 }
 
-void GuidedDistance::borrow(const PiecewiseLinearView& unit, float t0, float t1) {
-  kind_ = Kind::Borrowed;
-  unit_ = unit;
-  t0_ = t0;
-  length_ = std::max(t1 - t0, 1e-7f);
-}
-
 float GuidedDistance::sample(float u, float& pdf) const {
   switch (kind_) {
     case Kind::Linear: return linear_.sample(u, pdf);
     case Kind::EquiAngular: return equiAngular_.sample(u, pdf);
-    case Kind::Borrowed: {
-      const float x = unit_.sample(u, pdf);
-      pdf /= length_;
-      return t0_ + x * length_;
-    }
+    case Kind::Shared: return shared_->sample(u, pdf);
   }
   pdf = 0.0f;
   return 0.0f;
@@ -157,7 +146,7 @@ float GuidedDistance::pdf(float t) const {
   switch (kind_) {
     case Kind::Linear: return linear_.pdf(t);
     case Kind::EquiAngular: return equiAngular_.pdf(t);
-    case Kind::Borrowed: return unit_.pdf((t - t0_) / length_) / length_;
+    case Kind::Shared: return shared_->pdf(t);
   }
   return 0.0f;
 }

@@ -61,9 +61,12 @@ struct PiecewiseLinearView {
 // What a pixel's camera rays use for their guided sample (renderer/camera_guides.h): the pixel's
 // unit-interval table, and the one-sample probability q of keeping the guided vertex. q = 0: the
 // pixel's rays get no guided sample at all (tracking alone serves them).
-struct CameraRayGuide {
-  const PiecewiseLinearView* table = nullptr;
+// One cache line per pixel, the view stored inline: a camera ray reads its q and its table's
+// header in one line, and can prefetch the table itself before its walk (PathTracer::prepareGuide).
+struct alignas(64) CameraRayGuide {
+  const PiecewiseLinearView* table = nullptr;  // &view, or null: no guided sample for this pixel
   float guidedProbability = 0.5f;
+  PiecewiseLinearView view;
 };
 
 class PiecewiseLinearDistance {
@@ -107,10 +110,11 @@ class EquiAngularDistance {
 
 // The guided distance density of one ray segment, the distance-sampler piece of a strategy:
 // piecewise-linear from probe knots, or an equi-angular mixture, over the segment's medium
-// interval [t0, t1]. It can also borrow a piecewise-linear density built once over the unit
-// interval (a pixel's cached camera-ray table, renderer/camera_guides.h) and map it onto each ray's
-// own interval: t = t0 + x (t1 - t0), p(t) = p_unit(x) / (t1 - t0). Any such density is a valid
-// sampling choice for MIS as long as it depends on the ray alone, never on the walk.
+// interval [t0, t1]. It can also share a piecewise-linear density built once per pixel (a cached
+// camera-ray table over the pixel's centre ray's interval, renderer/camera_guides.h): every camera
+// ray through the pixel samples and evaluates it at its own distances t. Any such density is a valid
+// sampling choice for MIS as long as it depends on the ray alone, never on the walk; where it is zero
+// on a ray (past the centre ray's interval) the tracked technique alone covers it.
 class GuidedDistance {
  public:
   std::vector<DistanceKnot> knots;  // scratch: the probes' knots of the segment being built
@@ -121,18 +125,18 @@ class GuidedDistance {
   // From `knots` (sorted and clamped here).
   void buildPiecewiseLinear(float t0, float t1, float floor);
   void buildEquiAngular(const Ray& ray, float t0, float t1, const std::vector<EquiAngularTarget>& targets);
-  // Borrows `unit` (a density over [0, 1] whose tables outlive this density's use) for [t0, t1].
-  void borrow(const PiecewiseLinearView& unit, float t0, float t1);
+  // Shares `table` (a pixel's cached camera-ray density over its centre ray's medium interval,
+  // renderer/camera_guides.h, which outlives this density's use) instead of building one.
+  void share(const PiecewiseLinearView* table) { kind_ = Kind::Shared, shared_ = table; }
 
   float sample(float u, float& pdf) const;
   float pdf(float t) const;
 
  private:
-  enum class Kind { Linear, EquiAngular, Borrowed } kind_ = Kind::Linear;
+  enum class Kind { Linear, EquiAngular, Shared } kind_ = Kind::Linear;
   PiecewiseLinearDistance linear_;
   EquiAngularDistance equiAngular_;
-  PiecewiseLinearView unit_;
-  float t0_ = 0.0f, length_ = 1.0f;
+  const PiecewiseLinearView* shared_ = nullptr;
 };
 
 }  // namespace candela

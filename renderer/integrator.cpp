@@ -470,25 +470,32 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table)) return false;
   ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table
   guide.guidedProbability = cached ? cameraGuide->guidedProbability : st.segment > 0 ? g.secondary_probability : g.guided_probability;
-  float tIn = 0.0f, tOut = 0.0f;
   if (cached) {
-    // The pixel's cached table (camera_guides.h), mapped onto this ray's own medium interval. The
-    // thickness test was made once for the pixel's centre ray: a choice by pixel, not per ray.
-    if (!mediumInterval(st.ray, tEnd, tIn, tOut)) return false;
-    guide.borrow(*cameraGuide->table, tIn, tOut);
+    // The pixel's cached table (camera_guides.h), over its centre ray's medium interval: a choice by
+    // pixel, as the thickness test made once for that ray is. Its table lies in memory no other
+    // camera ray touches this pass: fetching it while the walk runs takes a cache miss off the
+    // scattering's pdf (docs/performance.md, "Camera-ray tables in the cache").
+    const PiecewiseLinearView* table = cameraGuide->table;
+    __builtin_prefetch(table->ts);
+    __builtin_prefetch(table->vs);
+    __builtin_prefetch(table->cdf);
+    guide.share(table);
     return true;
   }
+  float tIn = 0.0f, tOut = 0.0f;
   return guideFor(st.ray, tEnd, tIn, tOut, guide);
 }
 
-Rgb PathTracer::guidedSample(const PathState& st, const GuidedDistance& guide, const std::vector<WalkCollision>* walked, float walkedT,
-                             Rng& rng) const {
+Rgb PathTracer::guidedSample(const PathState& st, float tEnd, const GuidedDistance& guide, const std::vector<WalkCollision>* walked,
+                             float walkedT, Rng& rng) const {
   ++threadWork().guided;
   const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
   float pdf = 0.0f;
   const float t = guide.sample(rng.uniform(), pdf);
-  if (!(pdf > 0.0f)) return Rgb(0.0f);
+  // A pixel's shared table spans its centre ray's interval: a jittered ray may end sooner, at a
+  // surface, and no light scatters there on this segment.
+  if (!(pdf > 0.0f) || !(t < tEnd)) return Rgb(0.0f);
   // Null collisions on [0, t) by ratio tracking, with exact products (no roulette): `ratio` is the
   // estimator's transmittance, `nullProbability` what the tracked technique would have paid.
   float ratio = 1.0f, nullProbability = 1.0f;
@@ -649,7 +656,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
           trackedDirect = trackedWeight;
         }
       }
-      if (guidedPicked) L += guidedSample(segmentStart, guide, shareWalk ? &scratch.walked() : nullptr, walk.coveredT, rng);
+      if (guidedPicked) L += guidedSample(segmentStart, tEnd, guide, shareWalk ? &scratch.walked() : nullptr, walk.coveredT, rng);
     }
     if (walk.event == SegmentWalk::Event::Absorbed) break;
 

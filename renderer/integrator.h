@@ -117,9 +117,10 @@ class PathTracer {
   // The guided distance sample of one ray segment (docs/method.md s.4), drawn from `guide`: its
   // vertex's direct light, and with guided_vertex = path also the path continuing from it. `walked`,
   // when given, holds the segment's tracked walk's collisions over (0, walkedT], which it reuses;
-  // without it the sample walks its own null collisions from the segment's start.
-  Rgb guidedSample(const PathState& state, const GuidedDistance& guide, const std::vector<WalkCollision>* walked, float walkedT,
-                   Rng& rng) const;
+  // without it the sample walks its own null collisions from the segment's start. tEnd: where the
+  // segment ends (a surface or infinity).
+  Rgb guidedSample(const PathState& state, float tEnd, const GuidedDistance& guide, const std::vector<WalkCollision>* walked,
+                   float walkedT, Rng& rng) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
   float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
   // MIS weight of the guided technique given r = p_tracked / p_guided.
