@@ -31,7 +31,7 @@ class CameraGuides {
   // only when something they depend on changed. Returns false when the strategy has no probe
   // guiding (then there is nothing to cache).
   bool prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera);
-  // The pixel's unit-interval table and q. A pixel whose centre ray gets no guided sample (no
+  // The pixel's table and q. A pixel whose centre ray gets no guided sample (no
   // medium, thicker than guiding.max_optical_depth, no probe light, dimmer than
   // guiding.dim_pixel_floor of the image's mean prediction) has no table and q = 0: its rays get none
   // either, a choice by pixel that spares every camera sample the interval and thickness walks.

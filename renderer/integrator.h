@@ -40,8 +40,8 @@ class PathTracer {
   // Radiance arriving along the camera ray (scene-linear RGB). May be non-finite on a bug; the film
   // rejects and counts such samples.
   Rgb radiance(const Ray& cameraRay, Rng& rng) const;
-  // The same, with the camera ray's guided density borrowed from `cameraGuide` (a unit-interval
-  // table for the ray's pixel and its q; null: built for the ray as usual).
+  // The same, with the camera ray's guided density shared from `cameraGuide` (the table of the
+  // ray's pixel and its q; null: built for the ray as usual).
   Rgb radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng) const;
 
   // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy

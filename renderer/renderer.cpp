@@ -25,7 +25,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   const uint64_t seed = scene_->render().seed;
   std::atomic<bool> cancelled{false};
   PathTracer tracer(*scene_);
-  // Camera rays of the scene's own camera borrow their pixel's cached guide table (camera_guides.h);
+  // Camera rays of the scene's own camera share their pixel's cached guide table (camera_guides.h);
   // a preview's override camera builds per ray.
   const bool cachedGuides = !cameraOverride && cameraGuides_.prepare(*scene_, tracer, camera);
 
