@@ -5,8 +5,9 @@
 // built once, from its centre ray, over that ray's medium interval; every camera ray through the
 // pixel shares it as it stands (GuidedDistance::share), a density in the distance t from the camera.
 // It then depends on the ray's pixel alone, never on the walk, so MIS stays unbiased; where a
-// jittered ray's interval reaches past the centre ray's, the tracked technique alone samples. Any change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q
-// (or region map of q) only refreshes each pixel's.
+// jittered ray's interval reaches past the centre ray's, the tracked technique alone samples. Any
+// change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q (or region
+// map of q) only refreshes each pixel's.
 #pragma once
 
 #include "distance_sampler.h"

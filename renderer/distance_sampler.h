@@ -59,7 +59,7 @@ struct PiecewiseLinearView {
 };
 
 // What a pixel's camera rays use for their guided sample (renderer/camera_guides.h): the pixel's
-// unit-interval table, and the one-sample probability q of keeping the guided vertex. q = 0: the
+// table, and the one-sample probability q of keeping the guided vertex. q = 0: the
 // pixel's rays get no guided sample at all (tracking alone serves them).
 // One cache line per pixel, the view stored inline: a camera ray reads its q and its table's
 // header in one line, and can prefetch the table itself before its walk (PathTracer::prepareGuide).
