@@ -87,18 +87,18 @@ bool trackCollisions(const MediaView& view, const Ray& ray, float tMax, Rng& rng
   MediumTrack* tracks = reinterpret_cast<MediumTrack*>(storage);
   int n = 0;
   for (const Medium* m : view.media) {
-    MediumTrack* tr = new (&tracks[n]) MediumTrack(*m, transmittanceOnly);
     const Mat4& ifw = m->indexFromWorld();
-    tr->o = Vec3(ifw * glm::vec4(ray.origin, 1.0f));
-    tr->d = Vec3(ifw * glm::vec4(ray.direction, 0.0f));
-    tr->dda = MajorantDda(m->majorantGrid(), tr->o, tr->d, 0.0f, tMax);
+    const Vec3 o = Vec3(ifw * glm::vec4(ray.origin, 1.0f));
+    const Vec3 d = Vec3(ifw * glm::vec4(ray.direction, 0.0f));
+    MajorantDda dda(m->majorantGrid(), o, d, 0.0f, tMax);
+    float t0, t1;
     int cell;
-    if (tr->dda.next(tr->t0, tr->t1, cell)) {
-      tr->muBar = tr->cellMajorant(cell);
-      ++n;
-    } else {
-      tr->~MediumTrack();
-    }
+    // A medium whose domain the ray misses (a light sample past the flame, a camera ray beside it)
+    // costs its DDA's slab test only, not the setup of its grids' accessors.
+    if (!dda.next(t0, t1, cell)) continue;
+    MediumTrack* tr = new (&tracks[n++]) MediumTrack(*m, transmittanceOnly);
+    tr->o = o, tr->d = d, tr->dda = dda, tr->t0 = t0, tr->t1 = t1;
+    tr->muBar = tr->cellMajorant(cell);
   }
   struct Cleanup {
     MediumTrack* t;
