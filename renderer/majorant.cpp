@@ -113,23 +113,17 @@ MajorantGrid MajorantGrid::coarsened(int factor) const {
 MajorantDda::MajorantDda(const CoarseGrid& grid, const Vec3& o, const Vec3& d, float tMin, float tMax) {
   if (grid.empty()) return;
   res_ = grid.res;
-  // Work in cell coordinates: c = (p - origin) / cellExtent. One reciprocal per axis instead of a
-  // division per use: a DDA is set up per medium for every walk and light sample, and its divisions
-  // were most of its setup.
-  const Vec3 invExtent = 1.0f / grid.cellExtent;
-  const Vec3 co = (o - grid.origin) * invExtent;
-  const Vec3 cd = d * invExtent;
-  Vec3 inv(0.0f);
+  // Work in cell coordinates: c = (p - origin) / cellExtent.
+  const Vec3 co = (o - grid.origin) / grid.cellExtent;
+  const Vec3 cd = d / grid.cellExtent;
   float t0 = tMin, t1 = tMax;
   for (int a = 0; a < 3; ++a) {
-    // Parallel to the slabs (a direction this small in cell units never crosses one at finite t).
-    if (!(std::abs(cd[a]) > 1e-30f)) {
+    if (cd[a] == 0.0f) {
       if (co[a] < 0.0f || co[a] > static_cast<float>(res_[a])) return;
       continue;
     }
-    inv[a] = 1.0f / cd[a];
-    float ta = -co[a] * inv[a];
-    float tb = (static_cast<float>(res_[a]) - co[a]) * inv[a];
+    float ta = (0.0f - co[a]) / cd[a];
+    float tb = (static_cast<float>(res_[a]) - co[a]) / cd[a];
     if (ta > tb) std::swap(ta, tb);
     t0 = std::max(t0, ta);
     t1 = std::min(t1, tb);
@@ -140,14 +134,14 @@ MajorantDda::MajorantDda(const CoarseGrid& grid, const Vec3& o, const Vec3& d, f
   const Vec3 p = co + t0 * cd;
   for (int a = 0; a < 3; ++a) {
     cellPos_[a] = std::clamp(static_cast<int>(std::floor(p[a])), 0, res_[a] - 1);
-    if (inv[a] > 0.0f) {
+    if (cd[a] > 0.0f) {
       step_[a] = 1;
-      tNext_[a] = t0 + (static_cast<float>(cellPos_[a] + 1) - p[a]) * inv[a];
-      tDelta_[a] = inv[a];
-    } else if (inv[a] < 0.0f) {
+      tNext_[a] = t0 + (static_cast<float>(cellPos_[a] + 1) - p[a]) / cd[a];
+      tDelta_[a] = 1.0f / cd[a];
+    } else if (cd[a] < 0.0f) {
       step_[a] = -1;
-      tNext_[a] = t0 + (static_cast<float>(cellPos_[a]) - p[a]) * inv[a];
-      tDelta_[a] = -inv[a];
+      tNext_[a] = t0 + (static_cast<float>(cellPos_[a]) - p[a]) / cd[a];
+      tDelta_[a] = -1.0f / cd[a];
     } else {
       step_[a] = 0;
       tNext_[a] = kInfinity;
