@@ -43,7 +43,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   width_ = camera.width();
   height_ = camera.height();
   const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  guides_.assign(pixels, CameraRayGuide{nullptr, 0.0f, PiecewiseLinearView{}});
+  guides_.assign(pixels, CameraRayGuide{0.0f, PiecewiseLinearView{}});
   present_.assign(pixels, 0);
   // Rows in parallel, each into its own buffer, which the row's views point into and which keeps its
   // capacity for the next rebuild. Copied into one flat array and freed, as they were, they made a
@@ -99,7 +99,6 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       v.ts = start;
       v.vs = start + v.n;
       v.cdf = start + 2 * v.n;
-      guides_[i].table = &v;
     }
   }
   return true;

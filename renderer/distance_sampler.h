@@ -64,9 +64,10 @@ struct PiecewiseLinearView {
 // One cache line per pixel, the view stored inline: a camera ray reads its q and its table's
 // header in one line, and can prefetch the table itself before its walk (PathTracer::prepareGuide).
 struct alignas(64) CameraRayGuide {
-  const PiecewiseLinearView* table = nullptr;  // &view, or null: no guided sample for this pixel
   float guidedProbability = 0.5f;
-  PiecewiseLinearView view;
+  PiecewiseLinearView view;  // its arrays stay null for a pixel without a table
+  // The pixel's table, or null: no guided sample for this pixel.
+  const PiecewiseLinearView* table() const { return view.ts ? &view : nullptr; }
 };
 
 class PiecewiseLinearDistance {

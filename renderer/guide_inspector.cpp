@@ -142,7 +142,7 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
       CameraGuides tables;
       const PathTracer tracer(scene);
       tables.prepare(scene, tracer, scene.camera());
-      pixel.dim_pixel = tables.at(x, y)->table == nullptr && tables.predictedLight(x, y) > 0.0f;
+      pixel.dim_pixel = tables.at(x, y)->table() == nullptr && tables.predictedLight(x, y) > 0.0f;
     }
     return inspectGuideAlongRay(scene, camera, 0, pixel);
   }

@@ -467,15 +467,15 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   const bool cached = st.segment == 0 && cameraGuide;
   // A pixel whose q is 0 (no table, or auto's region map said tracking alone) gets no guided
   // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
-  if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table)) return false;
-  ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table
+  if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table())) return false;
+  ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table (a pixel's cached one: a lookup)
   guide.guidedProbability = cached ? cameraGuide->guidedProbability : st.segment > 0 ? g.secondary_probability : g.guided_probability;
   if (cached) {
     // The pixel's cached table (camera_guides.h), over its centre ray's medium interval: a choice by
     // pixel, as the thickness test made once for that ray is. Its table lies in memory no other
     // camera ray touches this pass: fetching it while the walk runs takes a cache miss off the
     // scattering's pdf (docs/performance.md, "Camera-ray tables in the cache").
-    const PiecewiseLinearView* table = cameraGuide->table;
+    const PiecewiseLinearView* table = cameraGuide->table();
     __builtin_prefetch(table->ts);
     __builtin_prefetch(table->vs);
     __builtin_prefetch(table->cdf);

@@ -237,7 +237,7 @@ TEST(AutoStrategy, ARegionMapSetsEachPixelsGuidedProbability) {
   int guidedRight = 0, guidedRow = 0;
   for (int y = 0; y < 18; ++y) {
     EXPECT_EQ(cache.at(5, y)->guidedProbability, 0.0f);
-    if (!cache.at(25, y)->table) continue;
+    if (!cache.at(25, y)->table()) continue;
     EXPECT_EQ(cache.at(25, y)->guidedProbability, 0.75f);
     ++guidedRight;
     guidedRow = y;
@@ -250,7 +250,7 @@ TEST(AutoStrategy, ARegionMapSetsEachPixelsGuidedProbability) {
   const float q = scene->strategy().guiding.guided_probability;
   for (int y = 0; y < 18; ++y)
     for (int x : {5, 25})
-      if (cache.at(x, y)->table) {
+      if (cache.at(x, y)->table()) {
         EXPECT_EQ(cache.at(x, y)->guidedProbability, q) << x << "," << y;
       }
   StrategySettings often = scene->strategy();

@@ -356,7 +356,7 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
   for (int y = 0; y < 48; ++y)
     for (int x = 0; x < 48; ++x) {
       const float light = cache.predictedLight(x, y);
-      const bool hasTable = cache.at(x, y)->table != nullptr;
+      const bool hasTable = cache.at(x, y)->table() != nullptr;
       if (light <= 0.0f) {
         EXPECT_FALSE(hasTable) << x << "," << y;
         continue;
@@ -371,7 +371,7 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
   // The guide inspector says so for a dim pixel, and its MIS curve is the tracked density alone.
   for (int y = 0, shown = 0; y < 48 && !shown; ++y)
     for (int x = 0; x < 48 && !shown; ++x) {
-      if (cache.at(x, y)->table || !(cache.predictedLight(x, y) > 0.0f)) continue;
+      if (cache.at(x, y)->table() || !(cache.predictedLight(x, y) > 0.0f)) continue;
       GuideInspectOptions options;
       options.bins = 16;
       options.light_samples = 2;
@@ -393,7 +393,7 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
   ASSERT_TRUE(all.prepare(*unfloored, tracer0, unfloored->camera()));
   EXPECT_EQ(all.dimPixels(), 0u);
   for (int y = 0; y < 48; ++y)
-    for (int x = 0; x < 48; ++x) EXPECT_EQ(all.at(x, y)->table != nullptr, all.predictedLight(x, y) > 0.0f) << x << "," << y;
+    for (int x = 0; x < 48; ++x) EXPECT_EQ(all.at(x, y)->table() != nullptr, all.predictedLight(x, y) > 0.0f) << x << "," << y;
 }
 
 // A pixel's cached camera-ray table gives the same density as building it for the pixel's centre
@@ -416,13 +416,13 @@ TEST(CameraGuides, TablesEqualPerRayDensities) {
       const CameraRayGuide* pixel = cache.at(x, y);
       // Dim pixels are left to tracking (CameraGuides.DimPixelsAreLeftToTracking).
       const bool dim = cache.predictedLight(x, y) < cache.dimThreshold();
-      ASSERT_EQ(guided && !dim, pixel->table != nullptr) << x << "," << y;
-      if (!pixel->table) {
+      ASSERT_EQ(guided && !dim, pixel->table() != nullptr) << x << "," << y;
+      if (!pixel->table()) {
         EXPECT_EQ(pixel->guidedProbability, 0.0f) << "no table, no guided sample";
         continue;
       }
       EXPECT_EQ(pixel->guidedProbability, scene->strategy().guiding.guided_probability) << "adaptive q is off";
-      shared.share(pixel->table);
+      shared.share(pixel->table());
       for (int k = 0; k <= 16; ++k) {
         const float t = tIn + (tOut - tIn) * (k + 0.01f) / 16.02f;
         EXPECT_NEAR(shared.pdf(t), direct.pdf(t), 1e-3f * direct.pdf(t) + 1e-6f) << x << "," << y << " t " << t;
