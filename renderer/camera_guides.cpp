@@ -1,9 +1,12 @@
 #include "camera_guides.h"
 
 #include "integrator.h"
+#include "tracking.h"
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace candela {
@@ -11,6 +14,15 @@ namespace candela {
 float guidedProbabilityAt(const Scene& scene, int x, int y, int width, int height) {
   const GuidedRegions& regions = scene.guidedRegions();
   return regions.empty() ? scene.strategy().guiding.guided_probability : regions.at(x, y, width, height);
+}
+
+float CameraGuides::probabilityAt(const Scene& scene, int x, int y) const {
+  const float base = guidedProbabilityAt(scene, x, y, width_, height_);
+  const float most = scene.strategy().guiding.bright_pixel_probability;
+  // q = 0 (auto's region map: tracking alone) stays 0: raising it would guide where the pilot
+  // measured tracking ahead.
+  if (!(base > 0.0f) || !(most > base)) return base;
+  return std::clamp(base * brightness(x, y), base, most);
 }
 
 bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera) {
@@ -23,8 +35,9 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   // renders its q levels and region maps on tables built once.
   GuidingSettings tableSettings = g;
   tableSettings.guided_probability = 0.0f;
+  tableSettings.bright_pixel_probability = 0.0f;
   const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(tableSettings).dump();
-  std::string probabilityKey = std::to_string(g.guided_probability) + ";";
+  std::string probabilityKey = std::to_string(g.guided_probability) + ";" + std::to_string(g.bright_pixel_probability) + ";";
   for (float q : scene.guidedRegions().probability) probabilityKey += std::to_string(q) + ",";  // auto's region map
   if (key == key_) {
     if (probabilityKey != probabilityKey_) {
@@ -32,7 +45,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       for (int y = 0; y < height_; ++y)
         for (int x = 0; x < width_; ++x) {
           const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-          if (present_[i]) guides_[i].guidedProbability = guidedProbabilityAt(scene, x, y, width_, height_);
+          if (present_[i]) guides_[i].guidedProbability = probabilityAt(scene, x, y);
         }
     }
     return true;
@@ -52,6 +65,8 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   rows_.resize(static_cast<size_t>(height_));
   std::vector<std::vector<uint32_t>> offsets(static_cast<size_t>(height_));
   predicted_.assign(pixels, 0.0f);
+  std::vector<float> emissionBound(pixels, 0.0f);
+  const bool emits = scene.hasEmissiveMedia();
   tbb::parallel_for(0, height_, [&](int y) {
     GuidedDistance guide;
     PiecewiseLinearDistance table;
@@ -64,9 +79,9 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!tracer.guideFor(ray, tracer.nearestOccluder(ray), tIn, tOut, guide)) continue;
       predicted_[i] = static_cast<float>(knotsIntegral(guide.knots, tIn, tOut));
+      if (emits) emissionBound[i] = static_cast<float>(emissionBoundAlongRay(scene.media(), ray, tOut));
       table.build(tIn, tOut, guide.knots, g.floor);
       const PiecewiseLinearView v = table.view();
-      guides_[i].guidedProbability = guidedProbabilityAt(scene, x, y, width_, height_);
       PiecewiseLinearView& stored = guides_[i].view;
       stored = v;
       stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into the row below, once it stops growing
@@ -86,6 +101,23 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   dimPixels_ = 0;
   for (size_t i = 0; i < pixels; ++i)
     if (present_[i] && predicted_[i] < dimThreshold_) present_[i] = 0, guides_[i].guidedProbability = 0.0f, ++dimPixels_;
+  // Bright pixels (guiding.bright_pixel_probability): the prediction over the mean, times its share
+  // against the emission the centre ray may see. The share keeps a flame's pixels, whose light and
+  // noise are their own emission, at the base q: raising it there only buys light samples of the
+  // flame (fire: 4% more MSE per sample without it).
+  const double mean = sum / static_cast<double>(std::max<size_t>(1, pixels));
+  brightness_.assign(pixels, 0.0f);
+  for (size_t i = 0; i < pixels; ++i) {
+    if (!present_[i] || !(mean > 0.0)) continue;
+    const double predicted = predicted_[i];
+    const double share = predicted / (predicted + static_cast<double>(emissionBound[i]));
+    brightness_[i] = static_cast<float>(predicted / mean * (std::isfinite(share) ? share : 0.0));
+  }
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      if (present_[i]) guides_[i].guidedProbability = probabilityAt(scene, x, y);
+    }
   // The kept pixels' views into their rows (a dim pixel's table stays in its row, unused).
   bytes_ = 0;
   for (int y = 0; y < height_; ++y) {

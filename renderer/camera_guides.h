@@ -7,7 +7,13 @@
 // It then depends on the ray's pixel alone, never on the walk, so MIS stays unbiased; where a
 // jittered ray's interval reaches past the centre ray's, the tracked technique alone samples. Any
 // change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q (or region
-// map of q) only refreshes each pixel's.
+// map of q, or guiding.bright_pixel_probability) only refreshes each pixel's.
+//
+// Each pixel's q starts from guidedProbabilityAt and, with guiding.bright_pixel_probability, grows
+// where the probes predict that bright single scattering is the pixel's light (a sun shaft): by the
+// pixel's prediction over the image's mean, times the prediction's share against an upper bound of
+// the emission along the centre ray (emissionBoundAlongRay), up to that setting. Both come from the
+// centre ray, so q stays a function of the pixel alone (MIS unbiased, the same on any thread count).
 #pragma once
 
 #include "distance_sampler.h"
@@ -50,6 +56,11 @@ class CameraGuides {
     return predicted_.empty() ? 0.0f : predicted_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   }
   float dimThreshold() const { return dimThreshold_; }
+  // The factor guiding.bright_pixel_probability raises the pixel's q by (before the clamp): its
+  // prediction over the image's mean x its share against the emission bound. 0 without a table.
+  float brightness(int x, int y) const {
+    return brightness_.empty() ? 0.0f : brightness_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+  }
   size_t dimPixels() const { return dimPixels_; }
 
  private:
@@ -61,6 +72,8 @@ class CameraGuides {
   std::vector<CameraRayGuide> guides_;  // each pixel's table view and q
   std::vector<char> present_;
   std::vector<float> predicted_;
+  std::vector<float> brightness_;  // see brightness()
+  float probabilityAt(const Scene& scene, int x, int y) const;  // the pixel's q (a pixel with a table)
   float dimThreshold_ = 0.0f;
   size_t dimPixels_ = 0;
   int builds_ = 0;

@@ -135,14 +135,19 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
   const Ray camera = scene.camera().generate(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
   if (options.secondary_seed < 0) {
     GuideInspectOptions pixel = options;
-    if (pixel.guided_probability < 0.0f) pixel.guided_probability = guidedProbabilityAt(scene, x, y, scene.camera().width(), scene.camera().height());
+    const bool chosen = pixel.guided_probability >= 0.0f;
+    if (!chosen) pixel.guided_probability = guidedProbabilityAt(scene, x, y, scene.camera().width(), scene.camera().height());
     const GuidingSettings& g = scene.strategy().guiding;
-    if (g.guide == DistanceGuide::Probes && g.dim_pixel_floor > 0.0f && scene.probes()) {
-      // The floor is relative to the whole image's prediction: the render's own pixel tables say.
+    if (g.guide == DistanceGuide::Probes && (g.dim_pixel_floor > 0.0f || g.bright_pixel_probability > g.guided_probability) &&
+        scene.probes()) {
+      // The floor and a bright pixel's q are relative to the whole image's prediction: the render's
+      // own pixel tables say.
       CameraGuides tables;
       const PathTracer tracer(scene);
       tables.prepare(scene, tracer, scene.camera());
-      pixel.dim_pixel = tables.at(x, y)->table() == nullptr && tables.predictedLight(x, y) > 0.0f;
+      const CameraRayGuide* guide = tables.at(x, y);
+      pixel.dim_pixel = guide->table() == nullptr && tables.predictedLight(x, y) > 0.0f;
+      if (!chosen && guide->table()) pixel.guided_probability = guide->guidedProbability;
     }
     return inspectGuideAlongRay(scene, camera, 0, pixel);
   }

@@ -163,6 +163,14 @@ struct GuidingSettings {
   // variance and none of the variance (docs/performance.md, "Dim pixels"). 0: guide every pixel whose probes
   // carry light.
   float dim_pixel_floor = 0.05f;
+  // one_sample: the most q a pixel's camera rays get where the probes predict bright single
+  // scattering that is the pixel's light (camera_guides.h): q = guided_probability x (the pixel's
+  // prediction / the image's mean) x (its share against an upper bound of the emission along the
+  // centre ray), clamped to [guided_probability, this]. A sun shaft gets the guided vertex on one
+  // camera ray in two while dim mist keeps one in ten; a flame's pixels, whose light is their own
+  // emission, are not raised (docs/performance.md, "Bright pixels"). At most guided_probability
+  // (the struct's default 0): every pixel keeps guided_probability.
+  float bright_pixel_probability = 0.0f;
 
   template <class V>
   void visit(V& v) {
@@ -200,6 +208,11 @@ struct GuidingSettings {
             "Camera rays of pixels whose probes predict less scattered light than this fraction of the image's mean "
             "prediction get no guided sample (0: guide every pixel whose probes carry light)",
             Range{0.0, 1e3});
+    v.field("bright_pixel_probability", bright_pixel_probability,
+            "one_sample: the most guided_probability a pixel's camera rays get where the probes predict more single-scattered "
+            "light than the image's mean and more than the emission along the ray; q grows with both, from guided_probability up "
+            "to this (at most guided_probability: off)",
+            Range{0.0, 0.99});
   }
 };
 

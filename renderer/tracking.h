@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -294,6 +295,25 @@ inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, R
   }, true);
   if (weight > 0.0f) gatherBefore(kInfinity);
   return radiance;
+}
+
+// An upper bound of the emission along a ray, without its transmittance: int_0^tMax lum(S(t)) dt <=
+// the sum over the majorant cells it crosses of each emissive medium's cell maximum of lum(S) times
+// the length inside. Deterministic and cheap (no lookups), for choices that must depend on the ray
+// alone (camera_guides.h). Infinite for an emissive medium without maxima (nothing bounds it).
+inline double emissionBoundAlongRay(const MediaView& view, const Ray& ray, float tMax) {
+  double bound = 0.0;
+  for (const Medium* medium : view.media) {
+    if (!medium->emissive()) continue;
+    const std::vector<float>& maxima = medium->emissionMaxima();
+    if (maxima.empty() || medium->majorantGrid().empty()) return std::numeric_limits<double>::infinity();
+    const Mat4& ifw = medium->indexFromWorld();
+    MajorantDda dda(medium->majorantGrid(), Vec3(ifw * glm::vec4(ray.origin, 1.0f)), Vec3(ifw * glm::vec4(ray.direction, 0.0f)), 0.0f, tMax);
+    float t0 = 0.0f, t1 = 0.0f;
+    int cell = 0;
+    while (dda.next(t0, t1, cell)) bound += static_cast<double>(maxima[static_cast<size_t>(cell)]) * std::max(0.0f, t1 - t0);
+  }
+  return bound;
 }
 
 }  // namespace candela

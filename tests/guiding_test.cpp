@@ -290,7 +290,7 @@ TEST(GuideInspector, IdealCurveMatchesTheClosedFormOfAPointLightInASlab) {
 }
 
 // The MIS curve is the mixture the strategy draws from: q p_g + (1 - q) p_t with the ray's q under
-// one-sample MIS (full's one in ten on camera rays, the secondary q on later rays), the even mixture
+// one-sample MIS (full's one in ten on camera rays, raised in bright pixels; the secondary q on later rays), the even mixture
 // when each technique draws a sample.
 TEST(GuideInspector, MisCurveIsTheStrategysMixture) {
   auto check = [](const std::vector<std::string>& sets, int secondarySeed, double q) {
@@ -305,8 +305,19 @@ TEST(GuideInspector, MisCurveIsTheStrategysMixture) {
     for (size_t i = 0; i < r.t.size(); ++i)
       EXPECT_NEAR(r.misPdf[i], q * r.guidedPdf[i] + (1.0 - q) * r.trackedPdf[i], 1e-9 + 1e-6 * r.misPdf[i]) << i;
   };
-  check({}, -1, 0.1f);
-  check({"strategy.guiding.guided_probability=0.3"}, -1, 0.3f);
+  check({"strategy.guiding.bright_pixel_probability=0"}, -1, 0.1f);
+  check({"strategy.guiding.guided_probability=0.3", "strategy.guiding.bright_pixel_probability=0"}, -1, 0.3f);
+  {
+    // With bright pixels raised (full's default) the curve uses the q the render gives the pixel.
+    auto scene = Scene::build(test::loadScene("assets/scenes/test/point-in-slab.json", {}));
+    const PathTracer tracer(*scene);
+    CameraGuides tables;
+    ASSERT_TRUE(tables.prepare(*scene, tracer, scene->camera()));
+    ASSERT_TRUE(tables.at(1, 1)->table());
+    const float q = tables.at(1, 1)->guidedProbability;
+    EXPECT_GT(q, 0.1f) << "the pixel beside the light is bright";
+    check({}, -1, q);
+  }
   check({"strategy.guiding.guided_segments=2", "strategy.guiding.secondary_probability=0.7"}, 3, 0.7f);
   check({"strategy.guiding.combination=\"balance\""}, -1, 0.5);
 }
@@ -396,6 +407,66 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
     for (int x = 0; x < 48; ++x) EXPECT_EQ(all.at(x, y)->table() != nullptr, all.predictedLight(x, y) > 0.0f) << x << "," << y;
 }
 
+// guiding.bright_pixel_probability raises a pixel's q where the probes predict bright single
+// scattering that is the pixel's light: q = clamp(q0 x prediction / mean x share, q0, most), the share
+// being the prediction's against the emission bound of the centre ray. On god-rays-dark (no emission)
+// the sun shafts are raised and the dim haze keeps q0; on fire the flame's own pixels are held back
+// by their emission; at 0 (or at most q0) every pixel keeps q0.
+TEST(CameraGuides, BrightPixelsGetTheGuidedVertexMoreOften) {
+  auto check = [](const char* file, bool emits) {
+    auto scene = Scene::build(test::loadScene(file, {"strategy.preset=\"full\"", "camera.resolution=[64,36]"}));
+    const GuidingSettings& g = scene->strategy().guiding;
+    EXPECT_EQ(g.guided_probability, 0.1f);
+    EXPECT_EQ(g.bright_pixel_probability, 0.5f) << "the preset's";
+    const PathTracer tracer(*scene);
+    CameraGuides cache;
+    EXPECT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+    double sum = 0.0;
+    for (int y = 0; y < 36; ++y)
+      for (int x = 0; x < 64; ++x) sum += cache.predictedLight(x, y);
+    const double mean = sum / (64 * 36);
+    int raised = 0, kept = 0, heldBack = 0;
+    for (int y = 0; y < 36; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const CameraRayGuide* guide = cache.at(x, y);
+        if (!guide->table()) {
+          EXPECT_EQ(guide->guidedProbability, 0.0f) << x << "," << y;
+          continue;
+        }
+        const float relative = static_cast<float>(cache.predictedLight(x, y) / mean);
+        const float b = cache.brightness(x, y);
+        EXPECT_LE(b, relative * (1.0f + 1e-5f)) << x << "," << y << ": the share is at most 1";
+        if (!emits) {
+          EXPECT_NEAR(b, relative, 1e-4f * relative) << x << "," << y << ": nothing emits, the share is 1";
+        }
+        heldBack += emits && b < 0.5f * relative;
+        EXPECT_FLOAT_EQ(guide->guidedProbability, std::clamp(0.1f * b, 0.1f, 0.5f)) << x << "," << y;
+        raised += guide->guidedProbability > 0.1f;
+        kept += guide->guidedProbability == 0.1f;
+      }
+    EXPECT_GT(raised, 10) << file;
+    EXPECT_GT(kept, 20) << file;
+    if (emits) {
+      EXPECT_GT(heldBack, 10) << file << ": the flame's pixels see their own emission";
+    }
+
+    // Off: a new setting refreshes q without rebuilding the tables.
+    const int builds = cache.builds();
+    StrategySettings off = scene->strategy();
+    off.guiding.bright_pixel_probability = 0.0f;
+    scene->setStrategy(off);
+    EXPECT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+    EXPECT_EQ(cache.builds(), builds);
+    for (int y = 0; y < 36; ++y)
+      for (int x = 0; x < 64; ++x)
+        if (cache.at(x, y)->table()) {
+          EXPECT_EQ(cache.at(x, y)->guidedProbability, 0.1f) << x << "," << y;
+        }
+  };
+  check("assets/scenes/god-rays-dark.json", false);
+  check("assets/scenes/fire.json", true);
+}
+
 // A pixel's cached camera-ray table gives the same density as building it for the pixel's centre
 // ray, so for that ray the cache changes cost, never the sampling.
 TEST(CameraGuides, TablesEqualPerRayDensities) {
@@ -421,7 +492,10 @@ TEST(CameraGuides, TablesEqualPerRayDensities) {
         EXPECT_EQ(pixel->guidedProbability, 0.0f) << "no table, no guided sample";
         continue;
       }
-      EXPECT_EQ(pixel->guidedProbability, scene->strategy().guiding.guided_probability) << "adaptive q is off";
+      const GuidingSettings& g = scene->strategy().guiding;
+      EXPECT_FLOAT_EQ(pixel->guidedProbability, std::clamp(g.guided_probability * cache.brightness(x, y), g.guided_probability,
+                                                           std::max(g.guided_probability, g.bright_pixel_probability)))
+          << "q by the pixel's predicted brightness (CameraGuides.BrightPixelsGetTheGuidedVertexMoreOften)";
       shared.share(pixel->table());
       for (int k = 0; k <= 16; ++k) {
         const float t = tIn + (tOut - tIn) * (k + 0.01f) / 16.02f;
