@@ -57,7 +57,9 @@ class CameraGuides {
   }
   float dimThreshold() const { return dimThreshold_; }
   // The factor guiding.bright_pixel_probability raises the pixel's q by (before the clamp): its
-  // prediction over the image's mean x its share against the emission bound. 0 without a table.
+  // prediction over the image's mean x its share against the emission bound, the share taken only
+  // where the prediction exceeds the mean (below it q stays at its base either way). 0 without a
+  // table.
   float brightness(int x, int y) const {
     return brightness_.empty() ? 0.0f : brightness_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   }
