@@ -25,6 +25,14 @@ float CameraGuides::probabilityAt(const Scene& scene, int x, int y) const {
   return std::clamp(base * brightness(x, y), base, most);
 }
 
+void CameraGuides::refreshProbabilities(const Scene& scene) {
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      if (present_[i]) guides_[i].guidedProbability = probabilityAt(scene, x, y);
+    }
+}
+
 bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const Camera& camera) {
   const GuidingSettings& g = scene.strategy().guiding;
   if (g.guide != DistanceGuide::Probes) return false;
@@ -42,11 +50,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   if (key == key_) {
     if (probabilityKey != probabilityKey_) {
       probabilityKey_ = probabilityKey;
-      for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x) {
-          const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-          if (present_[i]) guides_[i].guidedProbability = probabilityAt(scene, x, y);
-        }
+      refreshProbabilities(scene);
     }
     return true;
   }
@@ -110,10 +114,10 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   const double mean = sum / static_cast<double>(std::max<size_t>(1, pixels));
   const bool emits = scene.hasEmissiveMedia();
   brightness_.assign(pixels, 0.0f);
-  tbb::parallel_for(0, height_, [&](int y) {
+  if (mean > 0.0) tbb::parallel_for(0, height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      if (!present_[i] || !(mean > 0.0)) continue;
+      if (!present_[i]) continue;
       const double relative = predicted_[i] / mean;
       double share = 1.0;
       if (emits && relative > 1.0) {
@@ -125,11 +129,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       brightness_[i] = static_cast<float>(relative * share);
     }
   });
-  for (int y = 0; y < height_; ++y)
-    for (int x = 0; x < width_; ++x) {
-      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      if (present_[i]) guides_[i].guidedProbability = probabilityAt(scene, x, y);
-    }
+  refreshProbabilities(scene);
   // The kept pixels' views into their rows (a dim pixel's table stays in its row, unused).
   bytes_ = 0;
   for (int y = 0; y < height_; ++y) {

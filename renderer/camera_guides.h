@@ -76,6 +76,7 @@ class CameraGuides {
   std::vector<float> predicted_;
   std::vector<float> brightness_;  // see brightness()
   float probabilityAt(const Scene& scene, int x, int y) const;  // the pixel's q (a pixel with a table)
+  void refreshProbabilities(const Scene& scene);                 // every kept pixel's q from probabilityAt
   float dimThreshold_ = 0.0f;
   size_t dimPixels_ = 0;
   int builds_ = 0;
