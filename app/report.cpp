@@ -127,7 +127,7 @@ int runReport(bool quick, const std::string& dir, int threads) {
       run.strategy = preset;
       // auto's decision (rules, probes, pilot) is charged to its time: it renders for what is left.
       const double pilot = scene->autoDecision() ? scene->autoDecision()->pilotSeconds - scene->autoDecision()->probeSeconds : 0.0;
-      if (const AutoDecision* d = scene->autoDecision()) run.strategy = "auto (" + d->chosen + ")", run.note = d->summary();
+      if (const AutoDecision* d = scene->autoDecision()) run.strategy = "auto (" + d->label() + ")", run.note = d->summary();
       for (double budget : budgets) {
         Film film = continueFromPilot(*scene, 0);  // auto's pilot samples, where it kept them
         const double t = pilot + renderer.renderBudget(film, 1 << 24, std::max(0.01, budget - pilot), 1);

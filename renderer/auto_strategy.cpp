@@ -20,7 +20,7 @@ double WorkCounters::cost() const {
 }
 
 std::string AutoDecision::summary() const {
-  std::string s = "auto chose " + chosen;
+  std::string s = "auto chose " + label();
   for (size_t i = 0; i < reasons.size(); ++i) s += (i == 0 ? ": " : "; ") + reasons[i];
   if (!pilot.empty()) {
     s += "; pilot (" + std::to_string(pilotWidth) + "x" + std::to_string(pilotHeight) + ", " + std::to_string(pilotSpp) + " spp each" +
@@ -232,6 +232,7 @@ AutoDecision decide(Scene& scene) {
   std::vector<AutoCandidate> candidates = autoCandidates(scene, d.reasons);
   if (candidates.size() == 1) {
     d.chosen = candidates[0].name;
+    d.guidedContinuations = candidates[0].strategy.guiding.guided_segments > 1;
     scene.setStrategy(candidates[0].strategy);
     return d;
   }
@@ -476,6 +477,7 @@ AutoDecision decide(Scene& scene) {
     }
   }
   d.chosen = candidates[chosen].name;
+  d.guidedContinuations = candidates[chosen].strategy.guiding.guided_segments > 1;
   if (keep) d.pilotFilm = std::make_shared<const Film>(std::move(kept)), d.pilotView = viewKey(scene);
   else scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);

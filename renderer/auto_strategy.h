@@ -73,7 +73,13 @@ struct GuidedRegions {
 };
 
 struct AutoDecision {
-  std::string chosen;
+  std::string chosen;  // the candidate's name ("emission", "full", "full, by region", ...)
+  // The chosen candidate guides the rays leaving a medium vertex too (guided_segments > 1), which the
+  // preset of the same name does not: said wherever the choice is shown, so that an artist who picks
+  // the preset "full" after reading "auto chose full" knows it is not the same settings.
+  bool guidedContinuations = false;
+  // What the status bar, the report and the metadata show: the name, and "+ guided continuations".
+  std::string label() const { return guidedContinuations ? chosen + " + guided continuations" : chosen; }
   std::vector<std::string> reasons;        // the scene rules that decided the candidates
   std::vector<AutoMeasurement> pilot;      // empty when a single candidate needed no pilot
   double pilotWork = 0.0;                  // cost of the pilot in work units (ns on the calibration core)

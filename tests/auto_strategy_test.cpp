@@ -163,6 +163,27 @@ TEST(AutoStrategy, GuidedContinuationsWhereASunOrNoEmissionMakesShafts) {
   }
 }
 
+// What auto shows (status bar, report, metadata) says when its choice guides the rays leaving a
+// medium vertex, which the preset of the same name does not: "full" alone would send an artist to
+// settings that are not the ones auto rendered.
+TEST(AutoStrategy, ItsLabelSaysWhenTheChoiceGuidesContinuations) {
+  for (const char* name : {"god-rays-dark", "torch-in-mist"}) {
+    const auto scene = Scene::build(
+        test::loadScene(std::string("assets/scenes/") + name + ".json", {"strategy.preset=\"auto\"", "camera.resolution=[32,18]"}));
+    const AutoDecision* d = scene->autoDecision();
+    ASSERT_NE(d, nullptr) << name;
+    const bool continued = scene->strategy().guiding.guided_segments > 1;
+    EXPECT_EQ(d->guidedContinuations, continued) << name << ": " << d->summary();
+    EXPECT_EQ(d->label(), continued ? d->chosen + " + guided continuations" : d->chosen) << name;
+    EXPECT_EQ(d->summary().rfind("auto chose " + d->label(), 0), 0u) << d->summary();
+  }
+  AutoDecision d;
+  d.chosen = "full, by region";
+  EXPECT_EQ(d.label(), "full, by region");
+  d.guidedContinuations = true;
+  EXPECT_EQ(d.label(), "full, by region + guided continuations");
+}
+
 // Every candidate, guided or not, weights absorption at every collision as the full preset does,
 // in a scene without emission too.
 TEST(AutoStrategy, EveryCandidateGathersAtEveryCollision) {

@@ -203,7 +203,7 @@ void RenderSession::workerLoop() {
     frame->height = scene->camera().height();
     frame->seconds = seconds;
     frame->scene = std::make_shared<const SceneDesc>(scene->desc());
-    if (const AutoDecision* d = scene->autoDecision()) frame->autoDecision = d->summary(), frame->autoChoice = d->chosen;
+    if (const AutoDecision* d = scene->autoDecision()) frame->autoDecision = d->summary(), frame->autoChoice = d->label();
     frame->sceneCenter = scene->center();
     frame->sceneRadius = scene->radius();
     return frame;
