@@ -231,8 +231,7 @@ AutoDecision decide(Scene& scene) {
   AutoDecision d;
   std::vector<AutoCandidate> candidates = autoCandidates(scene, d.reasons);
   if (candidates.size() == 1) {
-    d.chosen = candidates[0].name;
-    d.guidedContinuations = candidates[0].strategy.guiding.guided_segments > 1;
+    d.choose(candidates[0]);
     scene.setStrategy(candidates[0].strategy);
     return d;
   }
@@ -476,8 +475,7 @@ AutoDecision decide(Scene& scene) {
       d.reasons.push_back("not " + margin + " ahead: " + candidates[standing].name);
     }
   }
-  d.chosen = candidates[chosen].name;
-  d.guidedContinuations = candidates[chosen].strategy.guiding.guided_segments > 1;
+  d.choose(candidates[chosen]);
   if (keep) d.pilotFilm = std::make_shared<const Film>(std::move(kept)), d.pilotView = viewKey(scene);
   else scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);

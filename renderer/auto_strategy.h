@@ -80,6 +80,8 @@ struct AutoDecision {
   bool guidedContinuations = false;
   // What the status bar, the report and the metadata show: the name, and "+ guided continuations".
   std::string label() const { return guidedContinuations ? chosen + " + guided continuations" : chosen; }
+  // Records the candidate as the choice: its name and whether it guides continuations.
+  void choose(const AutoCandidate& c) { chosen = c.name, guidedContinuations = c.strategy.guiding.guided_segments > 1; }
   std::vector<std::string> reasons;        // the scene rules that decided the candidates
   std::vector<AutoMeasurement> pilot;      // empty when a single candidate needed no pilot
   double pilotWork = 0.0;                  // cost of the pilot in work units (ns on the calibration core)
