@@ -132,26 +132,18 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   StrategySettings full = base;
   const StrategySettings fullPreset = strategyPreset("full");
   full.guiding = fullPreset.guiding;
-  bool sunLit = false;
-  for (const Light& l : scene.lights()) sunLit |= l.type() == LightType::Directional;
-  if (!emissive || sunLit) {
-    // Guided continuations: the rays leaving a medium vertex get a guided vertex too (those leaving
-    // surfaces do not). Where a camera vertex in dim haze continues into a thin sun shaft, the
-    // tracked vertex there is a rare, bright sample that the pilot's few samples per pixel seldom
-    // draw, so this is a rule, not a candidate: per sample (64 spp) it cut the relative variance
-    // 3-3.5x on god-rays-dark and 2x on god-rays-backlit for 12-20% more time, and cost 6-8% on
-    // the side-lit god-rays. Where volumes emit and no sun makes shafts, the guided vertex's light
-    // sample of the emissive volumes made it cost 14-29% more time for the same MSE (torch-in-mist,
-    // torch-in-fog, fire), and the continuations aimed at the volumes (docs/method.md s.3b) already
-    // reach their glow. Where a sun shines beside a flame (shed-fire) the shafts win again: x1.9-2.1
-    // by relative variance per unit of work, x0.97-1.04 by absolute (docs/performance.md, "Guided
-    // continuations").
-    full.guiding.guided_segments = 2;
-    full.guiding.secondary_rays = SecondaryRays::FromMedia;
-    full.guiding.secondary_probability = 1.0f;
-    reasons.push_back(std::string(emissive ? "a sun shines into the media" : "no volume emits") +
-                      ": guided candidates guide the rays leaving a medium vertex too");
-  }
+  const bool sunLit = scene.sunLit();
+  // Guided continuations (the thin rays leaving a medium vertex guided too) come with the preset
+  // (settings.cpp, guiding.secondary_rays = from_media_unless_flame_lit): where a sun shines or no
+  // volume emits. Where a camera vertex in dim haze continues into a thin sun shaft, the tracked
+  // vertex there is a rare, bright sample that the pilot's few samples per pixel seldom draw, so
+  // they are a rule, not a candidate. Where volumes emit and no sun makes shafts, the guided
+  // vertex's light sample of the emissive volumes made them cost 14-29% more time for the same MSE
+  // (torch-in-mist, torch-in-fog, fire), and the continuations aimed at the volumes (docs/method.md
+  // s.3b) already reach their glow (docs/performance.md, "Guided continuations").
+  if (guidedContinuationsApply(scene, full.guiding))
+    reasons.push_back(std::string(sunLit ? "a sun shines into the media" : "no volume emits") +
+                      ": guided candidates guide the thin rays leaving a medium vertex too");
   out.push_back({"full", full});
   // Where volumes emit, full (the guided vertex on one camera segment in ten) stands and the plain
   // candidate must beat it, unless the flames are the only concentrated light of a medium that

@@ -74,14 +74,11 @@ struct GuidedRegions {
 
 struct AutoDecision {
   std::string chosen;  // the candidate's name ("emission", "full", "full, by region", ...)
-  // The chosen candidate guides the rays leaving a medium vertex too (guided_segments > 1), which the
-  // preset of the same name does not: said wherever the choice is shown, so that an artist who picks
-  // the preset "full" after reading "auto chose full" knows it is not the same settings.
-  bool guidedContinuations = false;
-  // What the status bar, the report and the metadata show: the name, and "+ guided continuations".
-  std::string label() const { return guidedContinuations ? chosen + " + guided continuations" : chosen; }
-  // Records the candidate as the choice: its name and whether it guides continuations.
-  void choose(const AutoCandidate& c) { chosen = c.name, guidedContinuations = c.strategy.guiding.guided_segments > 1; }
+  // What the status bar, the report and the metadata show. (The candidates guide continuations as
+  // the preset of the same name does, so the name alone says which settings ran.)
+  std::string label() const { return chosen; }
+  // Records the candidate as the choice.
+  void choose(const AutoCandidate& c) { chosen = c.name; }
   std::vector<std::string> reasons;        // the scene rules that decided the candidates
   std::vector<AutoMeasurement> pilot;      // empty when a single candidate needed no pilot
   double pilotWork = 0.0;                  // cost of the pilot in work units (ns on the calibration core)

@@ -38,7 +38,8 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
   GuidedDistance guide;
   float tIn = 0.0f, tOut = 0.0f;
   const GuidingSettings& settings = scene.strategy().guiding;
-  const bool hasDensity = tracer.guideFor(ray, tEnd, tIn, tOut, guide);
+  const bool hasDensity = tracer.guideFor(ray, tEnd, tIn, tOut, guide, segment > 0);
+  const float maxDepth = segment > 0 ? settings.secondary_max_optical_depth : settings.max_optical_depth;
   if (!hasDensity) {
     // Still show the ideal and tracked densities over the medium interval.
     if (!tracer.mediumInterval(ray, tEnd, tIn, tOut)) {
@@ -49,13 +50,16 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
     if (settings.guide == DistanceGuide::Probes && scene.probes()) scene.probes()->gatherKnots(ray, tIn, tOut, knots);
     const bool lit = knotsCarryLight(knots);
     r.note = settings.guide == DistanceGuide::None ? "the strategy does not guide distances (guiding.guide = none)"
-             : settings.guide == DistanceGuide::Probes && !lit && tracer.mediaOpticalDepth(ray) <= settings.max_optical_depth
+             : settings.guide == DistanceGuide::Probes && !lit && (!(maxDepth > 0.0f) || tracer.mediaOpticalDepth(ray) <= maxDepth)
                  ? "not guided: no probe along the ray carries light"
-                 : "not guided: thicker than guiding.max_optical_depth";
+                 : segment > 0 ? "not guided: thicker than guiding.secondary_max_optical_depth" : "not guided: thicker than guiding.max_optical_depth";
   } else if (segment >= settings.guided_segments) {
     r.note = "not guided on this segment (guiding.guided_segments = " + std::to_string(settings.guided_segments) + "); the density shown is what it would be";
+  } else if (segment > 0 && !guidedContinuationsApply(scene, settings)) {
+    r.note = "not guided on this segment: volumes emit and no sun shines (guiding.secondary_rays = from_media_unless_flame_lit); the density "
+             "shown is what it would be";
   }
-  r.guided = hasDensity && segment < settings.guided_segments;
+  r.guided = hasDensity && segment < settings.guided_segments && (segment == 0 || guidedContinuationsApply(scene, settings));
   if (r.guided && segment == 0 && options.dim_pixel) {
     r.guided = false;
     r.note = "not guided: its probes predict less light than guiding.dim_pixel_floor x the image's mean; the density shown is what it would be";

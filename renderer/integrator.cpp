@@ -30,12 +30,13 @@ Rgb PathTracer::inScattered(const Vec3& p, const Vec3& wo, float g, Rng& rng) co
   return directLight(p, wo, g, Vec3(0.0f), Rgb(0.0f), false, rng);
 }
 
-bool PathTracer::guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out) const {
+bool PathTracer::guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out, bool secondary) const {
   const GuidingSettings& g = scene_.strategy().guiding;
   if (g.guide == DistanceGuide::None || !mediumInterval(ray, tEnd, tIn, tOut)) return false;
   // Thick rays are left to tracking, which scatters there reliably: the choice depends on the ray
   // alone (never on the walk), so MIS stays valid with the tracked technique alone on them.
-  if (g.max_optical_depth > 0.0f && majorantOpticalDepth(ray, tIn, tOut) > g.max_optical_depth) return false;
+  const float maxDepth = secondary ? g.secondary_max_optical_depth : g.max_optical_depth;
+  if (maxDepth > 0.0f && majorantOpticalDepth(ray, tIn, tOut) > maxDepth) return false;
   if (g.guide == DistanceGuide::EquiAngular) {
     out.buildEquiAngular(ray, tIn, tOut, equiAngularTargets_);
   } else {
@@ -462,8 +463,9 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   if (g.guide == DistanceGuide::None || st.segment >= g.guided_segments || st.lightsTaken || st.vertices >= scene_.render().max_depth)
     return false;
   // Later rays by their origin alone (a choice by path prefix, never by this segment's walk): from
-  // surfaces they are left to tracking under from_media.
-  if (st.segment > 0 && g.secondary_rays == SecondaryRays::FromMedia && !st.fromMedium) return false;
+  // surfaces they are left to tracking under from_media, and every one of them in a flame-lit scene
+  // under from_media_unless_flame_lit (a choice by scene).
+  if (st.segment > 0 && ((g.secondary_rays != SecondaryRays::All && !st.fromMedium) || !guidedContinuationsApply(scene_, g))) return false;
   const bool cached = st.segment == 0 && cameraGuide;
   // A pixel whose q is 0 (no table, or auto's region map said tracking alone) gets no guided
   // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
@@ -483,7 +485,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
     return true;
   }
   float tIn = 0.0f, tOut = 0.0f;
-  return guideFor(st.ray, tEnd, tIn, tOut, guide);
+  return guideFor(st.ray, tEnd, tIn, tOut, guide, st.segment > 0);
 }
 
 Rgb PathTracer::guidedSample(const PathState& st, float tEnd, const GuidedDistance& guide, const std::vector<WalkCollision>* walked,

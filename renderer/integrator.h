@@ -46,9 +46,10 @@ class PathTracer {
 
   // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy
   // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
-  // no medium, thicker than guiding.max_optical_depth, or no probe along it carries light). For the
+  // no medium, thicker than guiding.max_optical_depth, or for a ray after the camera ray
+  // (`secondary`) guiding.secondary_max_optical_depth, or no probe along it carries light). For the
   // inspector and the camera cache.
-  bool guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out) const;
+  bool guideFor(const Ray& ray, float tEnd, float& tIn, float& tOut, GuidedDistance& out, bool secondary = false) const;
   // Optical depth of the majorant of mu_t along a whole ray through the media (no surfaces), or a
   // negative value when the ray misses every medium. For the auto strategy's scene rules.
   float mediaOpticalDepth(const Ray& ray) const;

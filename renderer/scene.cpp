@@ -199,7 +199,10 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     scene->center_ = desc.camera.look_at;
     scene->radius_ = std::max(1e-3f, glm::length(desc.camera.look_at - desc.camera.position));
   }
-  for (const auto& l : desc.lights) scene->lights_.emplace_back(l);
+  for (const auto& l : desc.lights) {
+    scene->lights_.emplace_back(l);
+    scene->sunLit_ |= l.type == LightType::Directional && luminance(l.color) * l.intensity > 0.0f;
+  }
   scene->buildLightSampler();
   // A light whose power float cannot hold would be dropped by the light sampler: an error instead.
   for (size_t i = 0; i < scene->lights_.size(); ++i)

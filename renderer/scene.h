@@ -61,6 +61,9 @@ class Scene {
   const StrategySettings& strategy() const { return desc_.strategy; }
   const RenderSettings& render() const { return desc_.render; }
   bool hasEmissiveMedia() const { return hasEmissiveMedia_; }
+  // Some directional light (a sun) shines into the scene: its shafts through thin media are what
+  // guided continuations are for (guidedContinuationsApply).
+  bool sunLit() const { return sunLit_; }
   // Some medium emits per unit length (EmissionUnits::PerLength).
   bool hasPerLengthEmission() const { return hasPerLengthEmission_; }
   float radius() const { return radius_; }
@@ -117,6 +120,7 @@ class Scene {
   void buildLightSampler();
   std::unique_ptr<Surfaces> surfaces_;
   bool hasEmissiveMedia_ = false;
+  bool sunLit_ = false;
   bool hasPerLengthEmission_ = false;
   std::optional<AutoDecision> autoDecision_;
   GuidedRegions guidedRegions_;
@@ -126,5 +130,14 @@ class Scene {
   float radius_ = 1.0f;
   Vec3 center_{0.0f};
 };
+
+// Whether the rays after the camera ray that guiding.secondary_rays names may get a guided sample in
+// this scene (guided_segments > 1 still limits how many): from_media_unless_flame_lit leaves them to
+// tracking where volumes emit and no sun shines (settings.h). Depends on the scene's lights and
+// media, never on a path, so the choice keeps MIS unbiased.
+inline bool guidedContinuationsApply(const Scene& scene, const GuidingSettings& g) {
+  if (g.guide == DistanceGuide::None || g.guided_segments < 2) return false;
+  return g.secondary_rays != SecondaryRays::FromMediaUnlessFlameLit || !scene.hasEmissiveMedia() || scene.sunLit();
+}
 
 }  // namespace candela

@@ -124,12 +124,17 @@ struct EnumNames<GuidedVertex> {
 // leaving a scattering vertex in a medium; rays leaving a surface are left to tracking. On
 // god-rays-dark guiding the rays from surfaces too (most later rays: camera rays in thin haze mostly
 // reach the ground) made the render 1.75x as long as from_media's for the same variance (docs/performance.md,
-// "Guided continuations").
-enum class SecondaryRays { All, FromMedia };
+// "Guided continuations"). from_media_unless_flame_lit: as from_media, except in scenes where volumes
+// emit and no sun (directional light) shines (guidedContinuationsApply in scene.h): there the
+// continuations aimed at the emissive volumes (docs/method.md s.3b) already reach their glow, and a
+// guided later vertex pays a light sample through the flame (torch-in-mist: x0.76 per unit of work).
+enum class SecondaryRays { All, FromMedia, FromMediaUnlessFlameLit };
 template <>
 struct EnumNames<SecondaryRays> {
   static const std::vector<std::pair<SecondaryRays, const char*>>& get() {
-    static const std::vector<std::pair<SecondaryRays, const char*>> v{{SecondaryRays::All, "all"}, {SecondaryRays::FromMedia, "from_media"}};
+    static const std::vector<std::pair<SecondaryRays, const char*>> v{{SecondaryRays::All, "all"},
+                                                                      {SecondaryRays::FromMedia, "from_media"},
+                                                                      {SecondaryRays::FromMediaUnlessFlameLit, "from_media_unless_flame_lit"}};
     return v;
   }
 };
@@ -157,6 +162,13 @@ struct GuidingSettings {
   // learning short makes the image depend on machine speed, so it is reported as a warning.
   float probe_time_cap_s = 120.0f;
   float max_optical_depth = 4.0f; // skip guiding on rays thicker than this (majorant of mu_t); 0: never skip
+  // The same for the rays after the camera ray (guided_segments > 1). A continuation thicker than a
+  // few tenths scatters near its start, where its tracked vertex is as good as a guided one, and
+  // leaves most of its length unseen: on the side-lit god-rays guiding continuations up to 4 optical
+  // depths cost 41% more work for 12% less variance, up to 0.5 they cost 3% per unit of work, while
+  // god-rays-dark, god-rays-backlit and shed-fire keep their whole gain, which falls away below 0.35
+  // (docs/performance.md, "Guided continuations in full").
+  float secondary_max_optical_depth = 4.0f;
   // Camera rays of pixels whose probes predict less single-scattered light than this fraction of
   // the mean prediction over the image are left to tracking (camera_guides.h): on fire, 40% of the
   // guided pixels see next to nothing, and guiding them was 3.4% of the work for 6% of the relative
@@ -186,8 +198,9 @@ struct GuidingSettings {
             "both vertices add direct light and a continuing path, weighted by MIS");
     v.field("guided_segments", guided_segments, "Path segments that get a guided sample: 1 camera rays, 2 also the rays from the first vertex", Range{1, 64});
     v.field("secondary_rays", secondary_rays,
-            "guided_segments > 1: which rays after the camera ray get a guided sample: all, or from_media (only rays leaving a "
-            "scattering vertex in a medium; rays leaving a surface are left to tracking)");
+            "guided_segments > 1: which rays after the camera ray get a guided sample: all, from_media (only rays leaving a "
+            "scattering vertex in a medium; rays leaving a surface are left to tracking), or from_media_unless_flame_lit (as "
+            "from_media, but none in scenes where volumes emit and no sun shines)");
     v.field("secondary_probability", secondary_probability,
             "one_sample, guided_segments > 1: the probability that a guided segment after the camera ray uses the guided vertex",
             Range{0.01, 1.0});
@@ -203,6 +216,10 @@ struct GuidingSettings {
             Range{0.01, 3600.0});
     v.field("max_optical_depth", max_optical_depth,
             "Rays whose majorant optical depth exceeds this get no guided sample: tracking already scatters there (0: guide all)",
+            Range{0.0, 1e6});
+    v.field("secondary_max_optical_depth", secondary_max_optical_depth,
+            "guided_segments > 1: rays after the camera ray whose majorant optical depth exceeds this get no guided sample (0: "
+            "guide all)",
             Range{0.0, 1e6});
     v.field("dim_pixel_floor", dim_pixel_floor,
             "Camera rays of pixels whose probes predict less scattered light than this fraction of the image's mean "

@@ -1,7 +1,8 @@
 # `candela-cli render --strategy auto` charges auto its pilot: the summary's work per sample is the
 # pilot's work plus the render's over the image's samples, and says so. On god-rays the pilot renders
-# guided candidates at about 1.5x the plain candidate's work, so auto, which keeps the plain
-# candidate there, must show at least 10% more work per sample than the plain candidate rendered alone.
+# guided candidates at about 1.1-1.2x the plain candidate's work (their continuations only on rays
+# thinner than 0.5 optical depths), so auto, which keeps the plain candidate there, must show at
+# least 5% more work per sample than the plain candidate rendered alone (7.6% at this seed).
 # Seed 2: at 48x27 each candidate's pilot image holds 8 spp, and on seed 1 (of seeds 1-8) a fresh
 # round put `full, by region` ahead, whose own work would pass this check without any pilot.
 function(work_per_sample out var)
@@ -31,10 +32,10 @@ if(plain MATCHES "pilot's included")
 endif()
 work_per_sample("${auto}" auto_work)
 work_per_sample("${plain}" plain_work)
-# At least 10% more: without the pilot the two differ only by the tracking's own noise.
+# At least 5% more: without the pilot the two differ only by the tracking's own noise (well under 1%).
 string(REGEX REPLACE "\\..*" "" plain_whole "${plain_work}")
-math(EXPR plain_bound "${plain_whole} * 11 / 10")
+math(EXPR plain_bound "${plain_whole} * 105 / 100")
 if(NOT auto_work GREATER plain_bound)
-  message(FATAL_ERROR "auto's work per sample (${auto_work}) should exceed the plain candidate's (${plain_work}) by 10%: its pilot is not charged")
+  message(FATAL_ERROR "auto's work per sample (${auto_work}) should exceed the plain candidate's (${plain_work}) by 5%: its pilot is not charged")
 endif()
 message(STATUS "work per sample: auto ${auto_work} (pilot included), plain ${plain_work}")

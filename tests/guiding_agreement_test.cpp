@@ -1,7 +1,8 @@
 // Guided distance sampling is unbiased: `full` (probes + one-sample MIS), `equiangular`, probe guiding
 // alone (guided_only, no tracked scattering), MIS off (the two techniques averaged), the power
 // heuristic, a guided vertex that continues its own path, guiding on every segment, guided
-// continuations from medium vertices only (the tracked vertex weighing nothing there), the balance
+// continuations from medium vertices only (the tracked vertex weighing nothing there; `full` has
+// them on thin rays where a sun shines or no volume emits), the balance
 // heuristic over both vertices and one-sample MIS in path mode all agree
 // with `conventional` on god-rays (side-lit and backlit), torch-in-mist, cloud and a point light
 // inside the medium, with the scattering medium's g = 0, 0.9 and -0.9 (docs/method.md s.5).
@@ -40,8 +41,11 @@ const std::vector<std::pair<const char*, std::vector<std::string>>>& variants() 
       {"guided vertex continues (path)", {"strategy.preset=\"full\"", "strategy.guiding.guided_vertex=\"path\""}},
       {"every segment guided", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=64", "strategy.guiding.secondary_rays=\"all\""}},
       // Guided continuations: the rays leaving a medium vertex guided too, their guided vertex on
-      // every such segment (secondary_probability 1: the tracked vertex there weighs nothing).
-      {"continuations from media, q 1", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=2"}},
+      // every such segment (secondary_probability 1: the tracked vertex there weighs nothing). The
+      // preset `full` has them on rays up to 0.3 optical depths where no flame alone lights the
+      // scene (the first variant); here on every such ray up to 4, in every scene.
+      {"continuations from media, q 1",
+       {"strategy.preset=\"full\"", "strategy.guiding.secondary_rays=\"from_media\"", "strategy.guiding.secondary_max_optical_depth=4"}},
       // One-sample MIS: one vertex per guided segment, picked at random (guided with probability q).
       {"balance MIS (two vertices)", {"strategy.preset=\"full\"", "strategy.guiding.combination=\"balance\""}},
       // Pixels left to tracking by the probes' prediction (a floor at the image's mean leaves about

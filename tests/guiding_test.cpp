@@ -318,7 +318,9 @@ TEST(GuideInspector, MisCurveIsTheStrategysMixture) {
     EXPECT_GT(q, 0.1f) << "the pixel beside the light is bright";
     check({}, -1, q);
   }
-  check({"strategy.guiding.guided_segments=2", "strategy.guiding.secondary_probability=0.7"}, 3, 0.7f);
+  // The slab is thicker than full's guiding.secondary_max_optical_depth along the secondary ray.
+  check({"strategy.guiding.guided_segments=2", "strategy.guiding.secondary_probability=0.7", "strategy.guiding.secondary_max_optical_depth=4"}, 3,
+        0.7f);
   check({"strategy.guiding.combination=\"balance\""}, -1, 0.5);
 }
 
