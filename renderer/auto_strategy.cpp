@@ -224,7 +224,7 @@ AutoDecision decide(Scene& scene) {
   AutoDecision d;
   std::vector<AutoCandidate> candidates = autoCandidates(scene, d.reasons);
   if (candidates.size() == 1) {
-    d.choose(candidates[0]);
+    d.chosen = candidates[0].name;
     scene.setStrategy(candidates[0].strategy);
     return d;
   }
@@ -485,7 +485,7 @@ AutoDecision decide(Scene& scene) {
       chosen = fullIndex;
     if (!confirm(chosen, standing)) chosen = standing;
   }
-  d.choose(candidates[chosen]);
+  d.chosen = candidates[chosen].name;
   if (keep) d.pilotFilm = std::make_shared<const Film>(std::move(kept)), d.pilotView = viewKey(scene);
   else scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);

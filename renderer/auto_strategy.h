@@ -77,8 +77,6 @@ struct AutoDecision {
   // What the status bar, the report and the metadata show. (The candidates guide continuations as
   // the preset of the same name does, so the name alone says which settings ran.)
   std::string label() const { return chosen; }
-  // Records the candidate as the choice.
-  void choose(const AutoCandidate& c) { chosen = c.name; }
   std::vector<std::string> reasons;        // the scene rules that decided the candidates
   std::vector<AutoMeasurement> pilot;      // empty when a single candidate needed no pilot
   double pilotWork = 0.0;                  // cost of the pilot in work units (ns on the calibration core)

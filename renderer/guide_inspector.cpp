@@ -40,6 +40,7 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
   const GuidingSettings& settings = scene.strategy().guiding;
   const bool hasDensity = tracer.guideFor(ray, tEnd, tIn, tOut, guide, segment > 0);
   const float maxDepth = segment > 0 ? settings.secondary_max_optical_depth : settings.max_optical_depth;
+  const bool segmentGuided = segment < settings.guided_segments && (segment == 0 || guidedContinuationsApply(scene, settings));
   if (!hasDensity) {
     // Still show the ideal and tracked densities over the medium interval.
     if (!tracer.mediumInterval(ray, tEnd, tIn, tOut)) {
@@ -55,11 +56,11 @@ GuideInspection inspectGuideAlongRay(const Scene& scene, const Ray& ray, int seg
                  : segment > 0 ? "not guided: thicker than guiding.secondary_max_optical_depth" : "not guided: thicker than guiding.max_optical_depth";
   } else if (segment >= settings.guided_segments) {
     r.note = "not guided on this segment (guiding.guided_segments = " + std::to_string(settings.guided_segments) + "); the density shown is what it would be";
-  } else if (segment > 0 && !guidedContinuationsApply(scene, settings)) {
+  } else if (!segmentGuided) {
     r.note = "not guided on this segment: volumes emit and no sun shines (guiding.secondary_rays = from_media_unless_flame_lit); the density "
              "shown is what it would be";
   }
-  r.guided = hasDensity && segment < settings.guided_segments && (segment == 0 || guidedContinuationsApply(scene, settings));
+  r.guided = hasDensity && segmentGuided;
   if (r.guided && segment == 0 && options.dim_pixel) {
     r.guided = false;
     r.note = "not guided: its probes predict less light than guiding.dim_pixel_floor x the image's mean; the density shown is what it would be";

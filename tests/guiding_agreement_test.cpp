@@ -42,7 +42,7 @@ const std::vector<std::pair<const char*, std::vector<std::string>>>& variants() 
       {"every segment guided", {"strategy.preset=\"full\"", "strategy.guiding.guided_segments=64", "strategy.guiding.secondary_rays=\"all\""}},
       // Guided continuations: the rays leaving a medium vertex guided too, their guided vertex on
       // every such segment (secondary_probability 1: the tracked vertex there weighs nothing). The
-      // preset `full` has them on rays up to 0.3 optical depths where no flame alone lights the
+      // preset `full` has them on rays up to 0.5 optical depths where no flame alone lights the
       // scene (the first variant); here on every such ray up to 4, in every scene.
       {"continuations from media, q 1",
        {"strategy.preset=\"full\"", "strategy.guiding.secondary_rays=\"from_media\"", "strategy.guiding.secondary_max_optical_depth=4"}},
