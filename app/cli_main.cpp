@@ -115,6 +115,13 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
       const double n = std::max(1.0, static_cast<double>(w.samples));
       std::printf("work per sample by kind: collisions %.2f, segments %.2f, rays %.2f, knots %.2f, guided %.3f, guides %.3f\n",
                   w.collisions / n, w.segments / n, w.rays / n, w.knots / n, w.guided / n, w.guides / n);
+      if (const CameraGuides& guides = renderer.cameraGuides(); guides.measuredDecisions() > 0) {
+        const std::vector<size_t> counts = guides.pixelsByProbability();
+        std::printf("measured q (%zu decisions), pixels:", guides.measuredDecisions());
+        for (size_t c = 0; c < CameraGuides::kMeasuredProbabilities.size(); ++c)
+          std::printf(" %g: %zu", CameraGuides::kMeasuredProbabilities[c], counts[c]);
+        std::printf("\n");
+      }
       for (const Medium* m : scene->media().media) {
         const glm::ivec3 r = m->majorantGrid().resolution();
         std::printf("majorant of %s: %dx%dx%d cells (%dx cell_size)\n", m->desc().name.c_str(), r.x, r.y, r.z, m->majorantCoarsening());

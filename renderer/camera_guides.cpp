@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace candela {
 
@@ -47,10 +48,12 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(tableSettings).dump();
   std::string probabilityKey = std::to_string(g.guided_probability) + ";" + std::to_string(g.bright_pixel_probability) + ";";
   for (float q : scene.guidedRegions().probability) probabilityKey += std::to_string(q) + ",";  // auto's region map
+  measuring_ = g.measured_pixel_probability && g.combination == GuideCombination::OneSample && g.guided_vertex == GuidedVertex::Direct;
   if (key == key_) {
     if (probabilityKey != probabilityKey_) {
       probabilityKey_ = probabilityKey;
       refreshProbabilities(scene);
+      resetMeasures();
     }
     return true;
   }
@@ -130,6 +133,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
     }
   });
   refreshProbabilities(scene);
+  resetMeasures();
   // The kept pixels' views into their rows (a dim pixel's table stays in its row, unused).
   bytes_ = 0;
   for (int y = 0; y < height_; ++y) {
@@ -145,6 +149,144 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       v.cdf = start + 2 * v.n;
     }
   }
+  return true;
+}
+
+void CameraGuides::resetMeasures() {
+  measures_.clear();
+  blocksX_ = (width_ + kMeasureBlock - 1) / kMeasureBlock;
+  const int blocksY = (height_ + kMeasureBlock - 1) / kMeasureBlock;
+  if (measuring_) measures_.resize(static_cast<size_t>(blocksX_) * static_cast<size_t>(blocksY));
+  measuredSamples_ = 0;
+  nextDecision_ = 16;
+}
+
+void CameraGuides::restart(const Scene& scene) {
+  if (guides_.empty()) return;
+  refreshProbabilities(scene);
+  resetMeasures();
+}
+
+namespace {
+double mixturePdf(double q, double guidedPdf, double trackedPdf) { return q * guidedPdf + (1.0 - q) * trackedPdf; }
+}  // namespace
+
+void CameraGuides::record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample) {
+  BlockMeasure& m = measures_[block(x, y)];
+  m.samples += 1.0;
+  if (vertex.guidedDrawn) m.guided += 1.0, m.guidedWork += vertex.guidedWork;
+  // No direct light: nothing changes with q (a non-finite sample the film rejects, and so does this).
+  if (isBlack(vertex.direct) || !isFinite(vertex.direct) || !isFinite(sample)) return;
+  const double q = vertex.q;
+  const double drawn = mixturePdf(q, vertex.guidedPdf, vertex.trackedPdf);
+  const double d[3] = {vertex.direct.r, vertex.direct.g, vertex.direct.b};
+  const double r[3] = {sample.r - vertex.direct.r, sample.g - vertex.direct.g, sample.b - vertex.direct.b};
+  for (size_t c = 0; c < kMeasuredProbabilities.size(); ++c) {
+    const double other = kMeasuredProbabilities[c];
+    const double pdf = mixturePdf(other, vertex.guidedPdf, vertex.trackedPdf);
+    // A q' that could not have drawn this vertex (p_q' = 0) would lose its light: counted as a
+    // huge second moment, so that q' is not chosen.
+    const double ratio = pdf > 0.0 ? std::min(drawn / pdf, 1e6) : 1e6;
+    // E[R D] under q': the vertex's technique reweighted from q to q'.
+    const double technique = vertex.guidedDrawn ? (q > 0.0 ? other / q : 0.0) : (1.0 - other) / (1.0 - q);
+    for (int ch = 0; ch < 3; ++ch) m.change[c][ch] += d[ch] * d[ch] * (ratio - 1.0) + 2.0 * r[ch] * d[ch] * (ratio * technique - 1.0);
+  }
+}
+
+std::vector<size_t> CameraGuides::pixelsByProbability() const {
+  std::vector<size_t> counts(kMeasuredProbabilities.size() + 1, 0);
+  for (size_t i = 0; i < guides_.size(); ++i) {
+    if (!present_[i]) continue;
+    const auto at = std::find(kMeasuredProbabilities.begin(), kMeasuredProbabilities.end(), guides_[i].guidedProbability);
+    ++counts[static_cast<size_t>(at - kMeasuredProbabilities.begin())];
+  }
+  return counts;
+}
+
+double CameraGuides::measuredVarianceChange(size_t candidate) const {
+  double change = 0.0;
+  for (size_t b = 0; b < measures_.size(); ++b) {
+    const BlockMeasure& m = measures_[b];
+    const int x0 = static_cast<int>(b % static_cast<size_t>(blocksX_)) * kMeasureBlock;
+    const int y0 = static_cast<int>(b / static_cast<size_t>(blocksX_)) * kMeasureBlock;
+    double pixels = 0.0;
+    for (int y = y0; y < std::min(height_, y0 + kMeasureBlock); ++y)
+      for (int x = x0; x < std::min(width_, x0 + kMeasureBlock); ++x) pixels += present_[index(x, y)] ? 1.0 : 0.0;
+    if (!(m.samples > 0.0) || !(pixels > 0.0)) continue;
+    for (int ch = 0; ch < 3; ++ch) change += m.change[candidate][ch] / (m.samples / pixels);
+  }
+  return change;
+}
+
+bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
+  if (!measuring_ || measures_.empty()) return false;
+  measuredSamples_ += spp;
+  if (measuredSamples_ < nextDecision_) return false;
+  nextDecision_ = 2 * measuredSamples_;
+  const GuidingSettings& g = scene.strategy().guiding;
+  const double most = std::max(g.guided_probability, g.bright_pixel_probability);
+  // The image's variance per sample, its relative variance (the relMSE's, per channel, eps = (0.1 x
+  // the mean image's mean)^2) and its work per sample: a block's q' is weighed by how much it
+  // changes the logarithms of variance x work and relative variance x work together, so that
+  // neither is bought with the other. A block that drew no guided vertex (q was 0) prices one at
+  // the image's mean. All summed in a fixed order: the same on any thread count.
+  const double filmSpp = std::max(1, film.spp());
+  const std::vector<float>& sum = film.sum();
+  const std::vector<float>& sumSquares = film.sumSquares();
+  double meanOfMean = 0.0;
+  for (float v : sum) meanOfMean += v / filmSpp;
+  meanOfMean /= static_cast<double>(std::max<size_t>(1, sum.size()));
+  const double eps = (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+  auto pixelVariance = [&](size_t i) { return std::max(0.0, sumSquares[i] / filmSpp - (sum[i] / filmSpp) * (sum[i] / filmSpp)); };
+  auto inverseSquare = [&](size_t i) { return 1.0 / ((sum[i] / filmSpp) * (sum[i] / filmSpp) + eps); };
+  double variance = 0.0, relative = 0.0, work = 0.0, guidedWork = 0.0, guided = 0.0;
+  for (size_t i = 0; i < sum.size(); ++i) variance += pixelVariance(i), relative += pixelVariance(i) * inverseSquare(i);
+  for (const BlockMeasure& m : measures_) work += m.work, guidedWork += m.guidedWork, guided += m.guided;
+  if (!(guided > 0.0) || !(variance > 0.0) || !(relative > 0.0) || !(work > 0.0)) return false;
+  work /= measuredSamples_;  // per sample, summed over pixels
+  const double meanGuidedWork = guidedWork / guided;
+  tbb::parallel_for(0, static_cast<int>(measures_.size()), [&](int b) {
+    const BlockMeasure& m = measures_[static_cast<size_t>(b)];
+    const int x0 = (b % blocksX_) * kMeasureBlock, y0 = (b / blocksX_) * kMeasureBlock;
+    const int x1 = std::min(width_, x0 + kMeasureBlock), y1 = std::min(height_, y0 + kMeasureBlock);
+    // The block's pixels that record (a table and, under auto's region map, a q above 0: where its
+    // pilot measured tracking ahead they stay so); per channel, their variance-weighted mean of
+    // 1 / (mean^2 + eps), which turns a change of variance into one of relative variance.
+    double pixels = 0.0;
+    double blockVariance[3] = {0.0, 0.0, 0.0}, blockRelative[3] = {0.0, 0.0, 0.0}, blockInverse[3] = {0.0, 0.0, 0.0};
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = index(x, y);
+        if (!present_[i] || !(guidedProbabilityAt(scene, x, y, width_, height_) > 0.0f)) continue;
+        pixels += 1.0;
+        for (int ch = 0; ch < 3; ++ch) {
+          const size_t k = 3 * i + static_cast<size_t>(ch);
+          blockVariance[ch] += pixelVariance(k), blockRelative[ch] += pixelVariance(k) * inverseSquare(k), blockInverse[ch] += inverseSquare(k);
+        }
+      }
+    if (!(pixels > 0.0) || !(m.samples >= 8.0 * pixels)) return;
+    const double perPixel = m.samples / pixels;  // samples per pixel: the sums become per sample, summed over pixels
+    const double perGuided = m.guided > 0.0 ? m.guidedWork / m.guided : meanGuidedWork;
+    float best = kMeasuredProbabilities[0];
+    double bestScore = std::numeric_limits<double>::infinity();
+    for (size_t c = 0; c < kMeasuredProbabilities.size(); ++c) {
+      const double q = kMeasuredProbabilities[c];
+      if (q > most + 1e-6) continue;
+      double score = 2.0 * (q * perGuided * pixels - m.guidedWork / perPixel) / work;
+      for (int ch = 0; ch < 3; ++ch) {
+        const double change = m.change[c][ch] / perPixel;
+        const double toRelative = blockVariance[ch] > 0.0 ? blockRelative[ch] / blockVariance[ch] : blockInverse[ch] / pixels;
+        score += change / variance + change * toRelative / relative;
+      }
+      if (score < bestScore) bestScore = score, best = static_cast<float>(q);
+    }
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = index(x, y);
+        if (present_[i] && guidedProbabilityAt(scene, x, y, width_, height_) > 0.0f) guides_[i].guidedProbability = best;
+      }
+  });
+  ++measuredDecisions_;
   return true;
 }
 

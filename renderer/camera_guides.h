@@ -14,10 +14,31 @@
 // pixel's prediction over the image's mean, times the prediction's share against an upper bound of
 // the emission along the centre ray (emissionBoundAlongRay), up to that setting. Both come from the
 // centre ray, so q stays a function of the pixel alone (MIS unbiased, the same on any thread count).
+//
+// With guiding.measured_pixel_probability the samples then set q, per block of pixels. A camera
+// sample's vertex (guided or tracked) adds direct light D = f(t) / p_q(t), p_q = q p_g + (1 - q)
+// p_t, and at its t both densities are known, so D p_q / p_q' is what q' would have added there:
+// - E[D^2] under q' is E[D^2 p_q / p_q'] (one-sample MIS draws t from the mixture p_q);
+// - the covariance of D with the rest of the sample R (the walk's emission, the tracked vertex's
+//   continuation) changes too, and on a flame-lit ray it is what decides: a walk that scatters
+//   before the flame adds D and misses the flame's emission, one that passes adds no D, so the
+//   tracked vertex's D is anti-correlated with R and a guided one is not. E[R D] under q' is
+//   reweighted per technique: R D p_q / p_q' times (1 - q') / (1 - q) where the tracked vertex was
+//   drawn, q' / q where the guided one was (the walk, and so R, does not depend on q).
+// With the block's measured variance V (the film's) and work per sample W, q' predicts
+// V + (E'[D^2] - E[D^2]) + 2 (E'[R D] - E[R D]) and W + (q' - q) c, c the work of a guided vertex;
+// the block takes the q' whose product is least. q is set between passes, from passes already
+// rendered, so every sample is drawn with a q fixed before it: the image stays unbiased, and the
+// same passes give the same q on any thread count. The probes say where single scattering is; this
+// says whether guiding it lowers the pixel's noise per unit of work.
 #pragma once
 
 #include "distance_sampler.h"
+#include "film.h"
+#include "integrator.h"
 #include "scene.h"
+
+#include <array>
 
 #include <string>
 #include <vector>
@@ -65,7 +86,50 @@ class CameraGuides {
   }
   size_t dimPixels() const { return dimPixels_; }
 
+  // Measured q (guiding.measured_pixel_probability; see above). measuring(): the pixels record
+  // their samples, pooled over blocks of kMeasureBlock x kMeasureBlock pixels (a pixel's own few
+  // samples would choose mostly by their noise); a block lies inside one render tile, so only the
+  // thread rendering that tile writes it. record() and addPixelWork() come from that thread.
+  // restart() puts every pixel back at its predicted q (a fresh film: the same command gives the
+  // same image); passFinished() sets the measured q at 16, 32, 64... samples since then and says
+  // whether it did. The candidates are kMeasuredProbabilities up to the larger of
+  // guiding.guided_probability and guiding.bright_pixel_probability.
+  static constexpr std::array<float, 6> kMeasuredProbabilities{0.0f, 0.05f, 0.1f, 0.2f, 0.35f, 0.5f};
+  static constexpr int kMeasureBlock = 8;
+  bool measuring() const { return measuring_; }
+  void record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample);
+  void addPixelWork(int x, int y, double work) { measures_[block(x, y)].work += work; }
+  void restart(const Scene& scene);
+  bool passFinished(const Scene& scene, const Film& film, int spp);
+  size_t measuredDecisions() const { return measuredDecisions_; }  // how many times passFinished set q
+  // What the samples recorded since the last restart predict for kMeasuredProbabilities[candidate]
+  // everywhere: the change of the image's variance per sample, summed over pixels and channels
+  // (the film's sampleVariance). For tests and the record's arithmetic.
+  double measuredVarianceChange(size_t candidate) const;
+  // How many pixels with a table have each of kMeasuredProbabilities as their q, and last, how many
+  // have another (a predicted q, before the first measured one).
+  std::vector<size_t> pixelsByProbability() const;
+
  private:
+  size_t index(int x, int y) const { return static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x); }
+  size_t block(int x, int y) const {
+    return static_cast<size_t>(y / kMeasureBlock) * static_cast<size_t>(blocksX_) + static_cast<size_t>(x / kMeasureBlock);
+  }
+  // Sums over a block's recorded samples. D: the camera vertex's direct light; R: the rest of the
+  // sample.
+  struct BlockMeasure {
+    double samples = 0.0, work = 0.0, guided = 0.0, guidedWork = 0.0;
+    // Per channel: the change in the sum of the samples' squares that each candidate q' would
+    // bring, (D p_q / p_q')^2-type terms less D^2 and twice the same for R D (see above).
+    std::array<std::array<double, 3>, kMeasuredProbabilities.size()> change{};
+  };
+  std::vector<BlockMeasure> measures_;
+  int blocksX_ = 0;
+  bool measuring_ = false;
+  int measuredSamples_ = 0, nextDecision_ = 16;
+  size_t measuredDecisions_ = 0;
+  void resetMeasures();
+
   std::string key_;             // what the tables depend on
   std::string probabilityKey_;  // what the pixels' q depend on
   int width_ = 0, height_ = 0;

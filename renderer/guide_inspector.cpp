@@ -154,7 +154,12 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
       pixel.dim_pixel = guide->table() == nullptr && tables.predictedLight(x, y) > 0.0f;
       if (!chosen && guide->table()) pixel.guided_probability = guide->guidedProbability;
     }
-    return inspectGuideAlongRay(scene, camera, 0, pixel);
+    GuideInspection r = inspectGuideAlongRay(scene, camera, 0, pixel);
+    if (!chosen && r.guided && g.measured_pixel_probability && g.combination == GuideCombination::OneSample &&
+        g.guided_vertex == GuidedVertex::Direct)
+      r.note = "q shown is the probes' prediction; a render then sets the pixel's q from its own samples "
+               "(guiding.measured_pixel_probability)";
+    return r;
   }
   // A path chosen by the seed: a scattering distance on the camera ray from the tracked density
   // (conditioned on scattering), then a direction from the phase function there.

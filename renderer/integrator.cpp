@@ -248,10 +248,14 @@ float PathTracer::unphasedIncident(const Vec3& p, int index, Rng& rng) const {
 Rgb PathTracer::radiance(const Ray& cameraRay, Rng& rng) const { return radiance(cameraRay, nullptr, rng); }
 
 Rgb PathTracer::radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng) const {
+  return radiance(cameraRay, cameraGuide, rng, nullptr);
+}
+
+Rgb PathTracer::radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng, CameraVertexRecord* record) const {
   PathState state;
   state.ray = cameraRay;
   state.prevPos = cameraRay.origin;
-  return trace(state, cameraGuide, rng);
+  return trace(state, cameraGuide, rng, record);
 }
 
 bool PathTracer::scatterVertex(PathState& st, const Vec3& p, float g, Rgb& L, Rng& rng, float continueProbability,
@@ -489,7 +493,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
 }
 
 Rgb PathTracer::guidedSample(const PathState& st, float tEnd, const GuidedDistance& guide, const std::vector<WalkCollision>* walked,
-                             float walkedT, Rng& rng) const {
+                             float walkedT, Rng& rng, float* densities) const {
   ++threadWork().guided;
   const Scene& s = scene_;
   const bool gather = s.strategy().emission.gather_every_collision;
@@ -545,6 +549,7 @@ Rgb PathTracer::guidedSample(const PathState& st, float tEnd, const GuidedDistan
   // The vertex's NEE always uses its MIS-weighted throughput k = w_g T_hat mu_s / p_g (that is where
   // guiding pays off in thin media). In guided_vertex = path only the continuation is rouletted, with
   // probability min(1, k); in direct mode there is none (the tracked vertex carries the path).
+  if (densities) densities[0] = pdf, densities[1] = nullProbability * scatterDensity;
   const float weight = guidedWeight(nullProbability * scatterDensity / pdf, guide.guidedProbability);
   const float k = weight * ratio * sigmaS / pdf;
   if (!(k > 0.0f)) return Rgb(0.0f);
@@ -593,7 +598,7 @@ class PathTracer::SegmentScratch {
   Buffers* buffers_ = nullptr;
 };
 
-Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng) const {
+Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng, CameraVertexRecord* record) const {
   const Scene& s = scene_;
   const StrategySettings& strategy = s.strategy();
   const auto& lights = s.lights();
@@ -626,6 +631,14 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     // segment's start, before the walk changes the state.
     const bool guided = prepareGuide(st, tEnd, cameraGuide, guide);
     const PathState segmentStart = guided ? st : PathState{};
+    // The camera ray of a pixel whose q is measured (camera_guides.h): its vertex is recorded, and
+    // where the pixel's q is 0 the walk still keeps p_t (a product it otherwise skips), so that
+    // the pixel can learn what guiding would give it.
+    CameraVertexRecord* const rec =
+        record && st.segment == 0 && cameraGuide && cameraGuide->table() && strategy.guiding.combination == GuideCombination::OneSample
+            ? record
+            : nullptr;
+    if (rec) rec->table = true, rec->q = guided ? guide.guidedProbability : 0.0f;
     // With one-sample MIS the guided vertex reads its null collisions off the tracked walk's
     // (guidedSample). With two vertices per segment (balance, power, average) it draws its own: both
     // vertices' light samples estimate the same in-scattering, and on shared collisions they err
@@ -635,7 +648,11 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
     const bool oneSample = strategy.guiding.combination == GuideCombination::OneSample;
     const bool guidedPicked = guided && (!oneSample || rng.uniform() < guide.guidedProbability);
     const bool shareWalk = guidedPicked && oneSample;
-    const SegmentWalk walk = walkSegment(st, tEnd, guided, shareWalk ? &scratch.walked() : nullptr, emissionWeight, L, rng);
+    const SegmentWalk walk = walkSegment(st, tEnd, guided || rec, shareWalk ? &scratch.walked() : nullptr, emissionWeight, L, rng);
+    if (rec && !guidedPicked && walk.event == SegmentWalk::Event::Scattered) {
+      rec->guidedPdf = guided ? guide.pdf(walk.scatterT) : cameraGuide->table()->pdf(walk.scatterT);
+      rec->trackedPdf = walk.nullProbability * walk.scatterDensity;
+    }
 
     // The tracked scattering's MIS weight on a guided segment (docs/method.md s.4): on its NEE only in
     // guided_vertex = direct (the continuation is the tracked technique's alone, unweighted), or
@@ -658,12 +675,27 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng)
           trackedDirect = trackedWeight;
         }
       }
-      if (guidedPicked) L += guidedSample(segmentStart, tEnd, guide, shareWalk ? &scratch.walked() : nullptr, walk.coveredT, rng);
+      if (guidedPicked) {
+        const double workBefore = rec ? threadWork().cost() : 0.0;
+        float densities[2] = {0.0f, 0.0f};
+        const Rgb direct = guidedSample(segmentStart, tEnd, guide, shareWalk ? &scratch.walked() : nullptr, walk.coveredT, rng,
+                                        rec ? densities : nullptr);
+        L += direct;
+        if (rec) {
+          rec->guidedDrawn = true;
+          rec->guidedWork = threadWork().cost() - workBefore;
+          rec->guidedPdf = densities[0], rec->trackedPdf = densities[1], rec->direct = direct;
+        }
+      }
     }
     if (walk.event == SegmentWalk::Event::Absorbed) break;
 
     if (walk.event == SegmentWalk::Event::Scattered) {
-      if (isBlack(st.beta) || !scatterVertex(st, walk.scatterPos, walk.scatterG, L, rng, trackedContinue, trackedDirect)) break;
+      if (isBlack(st.beta)) break;
+      const Rgb before = L;
+      const bool continues = scatterVertex(st, walk.scatterPos, walk.scatterG, L, rng, trackedContinue, trackedDirect);
+      if (rec && !guidedPicked) rec->direct = L - before;
+      if (!continues) break;
       continue;
     }
 

@@ -43,6 +43,21 @@ class PathTracer {
   // The same, with the camera ray's guided density shared from `cameraGuide` (the table of the
   // ray's pixel and its q; null: built for the ray as usual).
   Rgb radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng) const;
+  // What the camera ray's scattering vertex did, for a pixel's measured q (camera_guides.h,
+  // guiding.measured_pixel_probability). Under one-sample MIS the vertex, guided or tracked, adds
+  // direct light D = f(t) / p_q(t), p_q = q p_g + (1 - q) p_t; with p_g and p_t at its distance, D
+  // tells what any other q would have given there.
+  struct CameraVertexRecord {
+    bool table = false;        // the pixel has a guide table (its q may be 0)
+    float q = 0.0f;            // the q this sample drew with
+    float guidedPdf = 0.0f;    // p_g at the vertex's distance
+    float trackedPdf = 0.0f;   // p_t at the vertex's distance (0: no vertex added light)
+    Rgb direct{0.0f};          // D
+    bool guidedDrawn = false;  // the guided vertex was drawn (guidedWork is its work)
+    double guidedWork = 0.0;
+  };
+  // The same, filling `record` for the camera ray (a pixel with a cached table; `record` may be null).
+  Rgb radiance(const Ray& cameraRay, const CameraRayGuide* cameraGuide, Rng& rng, CameraVertexRecord* record) const;
 
   // The guided distance density of a ray over its medium interval [tIn, tOut] as the strategy
   // builds it (probes or equi-angular), or false when the ray gets no guided sample (guiding off,
@@ -100,7 +115,7 @@ class PathTracer {
 
   // Follows a path from its current ray to the end; returns the radiance it gathers. The camera
   // ray's guided density comes from `cameraGuide` when given.
-  Rgb trace(PathState state, const CameraRayGuide* cameraGuide, Rng& rng) const;
+  Rgb trace(PathState state, const CameraRayGuide* cameraGuide, Rng& rng, CameraVertexRecord* record = nullptr) const;
   // The tracked walk along one segment (docs/method.md s.2): the one tracking loop with the strategy's
   // event probabilities (analogEvent or gatherEvent) as its collision callback. Adds emission to L.
   // On a guided segment the walk also replays the tracked pdf's null factors, and `record`, when
@@ -120,8 +135,10 @@ class PathTracer {
   // when given, holds the segment's tracked walk's collisions over (0, walkedT], which it reuses;
   // without it the sample walks its own null collisions from the segment's start. tEnd: where the
   // segment ends (a surface or infinity).
+  // `densities`, when given, receives p_g and p_t at the drawn distance (left alone when the sample
+  // adds nothing).
   Rgb guidedSample(const PathState& state, float tEnd, const GuidedDistance& guide, const std::vector<WalkCollision>* walked,
-                   float walkedT, Rng& rng) const;
+                   float walkedT, Rng& rng, float* densities = nullptr) const;
   // Optical depth of maj(mu_t) along a ray over [t0, t1] (no lookups: majorant cells only).
   float majorantOpticalDepth(const Ray& ray, float t0, float t1) const;
   // MIS weight of the guided technique given r = p_tracked / p_guided.

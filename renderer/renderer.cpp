@@ -28,6 +28,11 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   // Camera rays of the scene's own camera share their pixel's cached guide table (camera_guides.h);
   // a preview's override camera builds per ray.
   const bool cachedGuides = !cameraOverride && cameraGuides_.prepare(*scene_, tracer, camera);
+  // Measured q (camera_guides.h): a fresh film starts from the predicted q, so that the same
+  // command gives the same image whatever this renderer rendered before.
+  // Its blocks must each lie inside one tile (one thread writes a block).
+  const bool measure = cachedGuides && cameraGuides_.measuring() && options_.tileSize % CameraGuides::kMeasureBlock == 0;
+  if (measure && film.spp() == 0) cameraGuides_.restart(*scene_);
 
   // Each thread's work counters before and after its tiles: summed over the threads that ran them.
   tbb::enumerable_thread_specific<WorkCounters> passWork;
@@ -44,12 +49,21 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
         // The next pixel's guide (one cache line) arrives while this pixel's samples run.
         if (cachedGuides && x + 1 < x1) __builtin_prefetch(cameraGuides_.at(x + 1, y));
         const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
+        const double pixelWork = measure ? threadWork().cost() : 0.0;
         for (int s = 0; s < spp; ++s) {
           Rng rng(hashCombine(pixelKey, static_cast<uint64_t>(firstSample + s)), pixelKey);
           const float jx = rng.uniform(), jy = rng.uniform();
           const Ray ray = camera.generate(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
-          pass.addSample(x, y, tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng));
+          if (!measure) {
+            pass.addSample(x, y, tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng));
+            continue;
+          }
+          PathTracer::CameraVertexRecord record;
+          const Rgb value = tracer.radiance(ray, cameraGuides_.at(x, y), rng, &record);
+          pass.addSample(x, y, value);
+          if (record.table) cameraGuides_.record(x, y, record, value);
         }
+        if (measure) cameraGuides_.addPixelWork(x, y, threadWork().cost() - pixelWork);
       }
     WorkCounters& mine = passWork.local();
     mine += threadWork() - before;
@@ -74,6 +88,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   pass.setPassSpp(spp);
   film.addPass(pass);
   for (const WorkCounters& w : passWork) work_ += w;
+  if (measure) cameraGuides_.passFinished(*scene_, film, spp);
   return true;
 }
 

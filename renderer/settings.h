@@ -183,6 +183,15 @@ struct GuidingSettings {
   // emission, are not raised (docs/performance.md, "Bright pixels"). At most guided_probability
   // (the struct's default 0): every pixel keeps guided_probability.
   float bright_pixel_probability = 0.0f;
+  // one_sample, guided_vertex = direct: each pixel's camera-ray q measured instead of predicted
+  // (camera_guides.h). After 16, 32, 64... samples the pixel takes, among 0, 0.05, 0.1, 0.2, 0.35
+  // and 0.5 (at most the larger of the two settings above), the q whose variance x work its own
+  // samples predict least: its camera vertex's direct light D = f / p_q, with p_g and p_t at the
+  // vertex, says what any other q would have given there. Probes predict where single scattering
+  // is; this measures whether it is the pixel's noise. A flame's pixels, whose noise is their own
+  // emission, then spend nothing on guided vertices, while dim mist lit by it gets more.
+  // Every pass is rendered with q fixed before it starts, so the image stays unbiased.
+  bool measured_pixel_probability = false;
 
   template <class V>
   void visit(V& v) {
@@ -230,6 +239,9 @@ struct GuidingSettings {
             "light than the image's mean and more than the emission along the ray; q grows with both, from guided_probability up "
             "to this (at most guided_probability: off)",
             Range{0.0, 0.99});
+    v.field("measured_pixel_probability", measured_pixel_probability,
+            "one_sample, guided_vertex direct: after 16, 32, 64... samples each pixel's camera rays take the q (0 to the larger of "
+            "guided_probability and bright_pixel_probability) whose variance x work the pixel's own samples predict least");
   }
 };
 

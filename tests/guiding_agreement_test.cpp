@@ -6,7 +6,7 @@
 // heuristic over both vertices and one-sample MIS in path mode all agree
 // with `conventional` on god-rays (side-lit and backlit), torch-in-mist, cloud and a point light
 // inside the medium, with the scattering medium's g = 0, 0.9 and -0.9 (docs/method.md s.5).
-// The one-sample variants (full, continuations, dim pixels, bright pixels, path at q = 0.8) read the guided
+// The one-sample variants (full, continuations, dim pixels, bright pixels, measured q, path at q = 0.8) read the guided
 // vertex's null collisions off the segment's tracked walk and draw fresh ones past its stop (s.4);
 // the cloud, where guiding is forced onto thick rays, has most of its guided vertices past the stop.
 // Power (checked by injecting a bias into the guided sample's weight in integrator.cpp): a 5% bias
@@ -54,6 +54,12 @@ const std::vector<std::pair<const char*, std::vector<std::string>>>& variants() 
       // q raised by pixel from 0.05 up to 0.99 where the probes predict bright single scattering
       // (camera_guides.h): again a choice by pixel.
       {"bright pixels, q 0.05 to 0.99",
+       {"strategy.preset=\"full\"", "strategy.guiding.guided_probability=0.05", "strategy.guiding.bright_pixel_probability=0.99",
+        "strategy.guiding.measured_pixel_probability=false"}},
+      // q measured by blocks of pixels from 16 samples on (camera_guides.h), here starting from
+      // bright pixels' q up to 0.99: a choice made between passes from passes already rendered.
+      // (`full` measures too.)
+      {"measured q, from bright pixels up to 0.99",
        {"strategy.preset=\"full\"", "strategy.guiding.guided_probability=0.05", "strategy.guiding.bright_pixel_probability=0.99"}},
       {"one-sample MIS, path, q = 0.8",
        {"strategy.preset=\"full\"", "strategy.guiding.combination=\"one_sample\"", "strategy.guiding.guided_vertex=\"path\"",

@@ -3,9 +3,11 @@
 // pdf, probes are placed and learned within budget, and a background relearn swaps a new set in
 // while the old one keeps serving.
 #include "camera_guides.h"
+#include "convergence.h"
 #include "distance_sampler.h"
 #include "guide_inspector.h"
 #include "integrator.h"
+#include "renderer.h"
 #include "stats.h"
 #include "test_support.h"
 
@@ -467,6 +469,93 @@ TEST(CameraGuides, BrightPixelsGetTheGuidedVertexMoreOften) {
   };
   check("assets/scenes/god-rays-dark.json", false);
   check("assets/scenes/fire.json", true);
+}
+
+// Measured q (camera_guides.h): the samples drawn at one q predict the variance another q gives,
+// from each camera vertex's direct light D and the two densities at its distance, the covariance
+// of D with the rest of the sample included. Checked against renders at q = 0.05 and q = 0.5 on
+// torch-in-mist (where that covariance decides: a walk that scatters before the flame adds D and
+// misses the flame's emission) and god-rays-dark (thin haze, sun shafts).
+TEST(CameraGuides, MeasuredSamplesPredictTheVarianceOfAnotherQ) {
+  auto check = [](const char* file) {
+    const int w = 32, h = 18, spp = 1024;
+    auto desc = [&](float q, bool measured, uint32_t seed) {
+      return test::loadScene(file, {"strategy.preset=\"full\"", "camera.resolution=[32,18]", "strategy.guiding.bright_pixel_probability=0",
+                                    "strategy.guiding.guided_probability=" + std::to_string(q),
+                                    std::string("strategy.guiding.measured_pixel_probability=") + (measured ? "true" : "false"),
+                                    "render.seed=" + std::to_string(seed)});
+    };
+    // Samples at q = 0.1, recorded as the renderer does, without its decisions.
+    auto scene = Scene::build(desc(0.1f, true, 1));
+    const PathTracer tracer(*scene);
+    CameraGuides cache;
+    ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+    ASSERT_TRUE(cache.measuring());
+    double variance = 0.0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        double sum[3] = {0, 0, 0}, squares[3] = {0, 0, 0};
+        for (int s = 0; s < spp; ++s) {
+          Rng rng(hashCombine(7, static_cast<uint64_t>(y * w + x)), static_cast<uint64_t>(s));
+          const Ray ray = scene->camera().generate(x + rng.uniform(), y + rng.uniform());
+          PathTracer::CameraVertexRecord record;
+          const Rgb value = tracer.radiance(ray, cache.at(x, y), rng, &record);
+          if (record.table) cache.record(x, y, record, value);
+          const double v[3] = {value.r, value.g, value.b};
+          for (int c = 0; c < 3; ++c) sum[c] += v[c], squares[c] += v[c] * v[c];
+        }
+        for (int c = 0; c < 3; ++c) variance += (squares[c] / spp - (sum[c] / spp) * (sum[c] / spp)) * spp / (spp - 1.0);
+      }
+    for (size_t candidate : {size_t{1}, size_t{5}}) {
+      const float q = CameraGuides::kMeasuredProbabilities[candidate];
+      const double predicted = variance + cache.measuredVarianceChange(candidate);
+      const Film film = test::render(desc(q, false, 2), spp);
+      const double measured = variancePerSample(film) * 3.0 * w * h;
+      if (std::getenv("CANDELA_VERBOSE"))
+        std::printf("%s: at q 0.1 %.4g; q %.2f predicted %.4g (change %.4g), measured %.4g\n", file, variance, q, predicted,
+                    cache.measuredVarianceChange(candidate), measured);
+      EXPECT_NEAR(predicted / measured, 1.0, 0.1) << file << ", q " << q << ": predicted " << predicted << ", measured " << measured
+                                                   << " (at q 0.1: " << variance << ")";
+    }
+  };
+  check("assets/scenes/torch-in-mist.json");
+  check("assets/scenes/god-rays-dark.json");
+}
+
+// Measured q is set between passes from sums each block's one thread gathers: the same q, and so
+// the same image, on any thread count; and a fresh film starts again from the predicted q.
+TEST(CameraGuides, MeasuredQIsTheSameOnAnyThreadCount) {
+  const SceneDesc desc = test::loadScene("assets/scenes/god-rays-dark.json", {"strategy.preset=\"full\"", "camera.resolution=[48,27]"});
+  ASSERT_TRUE(desc.strategy.guiding.measured_pixel_probability) << "the preset's";
+  std::vector<std::vector<float>> sums, q;
+  for (int threads : {1, 2}) {
+    auto scene = Scene::build(desc);
+    ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
+    Film film;
+    renderer.renderBudget(film, 64, 0.0, 8);
+    const CameraGuides& cache = renderer.cameraGuides();
+    EXPECT_EQ(cache.measuredDecisions(), 3u) << "at 16, 32 and 64 samples";
+    std::vector<float> pixels;
+    int changed = 0;
+    for (int y = 0; y < 27; ++y)
+      for (int x = 0; x < 48; ++x) {
+        const CameraRayGuide* guide = cache.at(x, y);
+        if (!guide->table()) continue;
+        pixels.push_back(guide->guidedProbability);
+        const auto& candidates = CameraGuides::kMeasuredProbabilities;
+        EXPECT_NE(std::find(candidates.begin(), candidates.end(), guide->guidedProbability), candidates.end()) << x << "," << y;
+        changed += guide->guidedProbability != 0.1f;
+      }
+    EXPECT_GT(changed, 0) << "some blocks left the predicted q";
+    sums.push_back(film.sum());
+    q.push_back(pixels);
+    // A fresh film: the predicted q again, then the same decisions, the same image.
+    Film again;
+    renderer.renderBudget(again, 64, 0.0, 8);
+    EXPECT_EQ(again.sum(), film.sum());
+  }
+  EXPECT_EQ(sums[0], sums[1]);
+  EXPECT_EQ(q[0], q[1]);
 }
 
 // A pixel's cached camera-ray table gives the same density as building it for the pixel's centre
