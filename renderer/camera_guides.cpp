@@ -1,5 +1,6 @@
 #include "camera_guides.h"
 
+#include "convergence.h"
 #include "integrator.h"
 #include "tracking.h"
 
@@ -48,7 +49,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(tableSettings).dump();
   std::string probabilityKey = std::to_string(g.guided_probability) + ";" + std::to_string(g.bright_pixel_probability) + ";";
   for (float q : scene.guidedRegions().probability) probabilityKey += std::to_string(q) + ",";  // auto's region map
-  measuring_ = g.measured_pixel_probability && g.combination == GuideCombination::OneSample && g.guided_vertex == GuidedVertex::Direct;
+  measuring_ = measuresPixelProbability(g);
   if (key == key_) {
     if (probabilityKey != probabilityKey_) {
       probabilityKey_ = probabilityKey;
@@ -207,11 +208,10 @@ double CameraGuides::measuredVarianceChange(size_t candidate) const {
   double change = 0.0;
   for (size_t b = 0; b < measures_.size(); ++b) {
     const BlockMeasure& m = measures_[b];
-    const int x0 = static_cast<int>(b % static_cast<size_t>(blocksX_)) * kMeasureBlock;
-    const int y0 = static_cast<int>(b / static_cast<size_t>(blocksX_)) * kMeasureBlock;
+    const BlockRect r = blockRect(b);
     double pixels = 0.0;
-    for (int y = y0; y < std::min(height_, y0 + kMeasureBlock); ++y)
-      for (int x = x0; x < std::min(width_, x0 + kMeasureBlock); ++x) pixels += present_[index(x, y)] ? 1.0 : 0.0;
+    for (int y = r.y0; y < r.y1; ++y)
+      for (int x = r.x0; x < r.x1; ++x) pixels += present_[index(x, y)] ? 1.0 : 0.0;
     if (!(m.samples > 0.0) || !(pixels > 0.0)) continue;
     for (int ch = 0; ch < 3; ++ch) change += m.change[candidate][ch] / (m.samples / pixels);
   }
@@ -236,7 +236,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
   double meanOfMean = 0.0;
   for (float v : sum) meanOfMean += v / filmSpp;
   meanOfMean /= static_cast<double>(std::max<size_t>(1, sum.size()));
-  const double eps = (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+  const double eps = relativeEpsilon(meanOfMean);
   auto pixelVariance = [&](size_t i) { return std::max(0.0, sumSquares[i] / filmSpp - (sum[i] / filmSpp) * (sum[i] / filmSpp)); };
   auto inverseSquare = [&](size_t i) { return 1.0 / ((sum[i] / filmSpp) * (sum[i] / filmSpp) + eps); };
   double variance = 0.0, relative = 0.0, work = 0.0, guidedWork = 0.0, guided = 0.0;
@@ -245,19 +245,20 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
   if (!(guided > 0.0) || !(variance > 0.0) || !(relative > 0.0) || !(work > 0.0)) return false;
   work /= measuredSamples_;  // per sample, summed over pixels
   const double meanGuidedWork = guidedWork / guided;
+  // The pixels whose q is measured: a table and, under auto's region map, a q above 0 (where its
+  // pilot measured tracking ahead they stay so).
+  auto measured = [&](int x, int y) { return present_[index(x, y)] && guidedProbabilityAt(scene, x, y, width_, height_) > 0.0f; };
   tbb::parallel_for(0, static_cast<int>(measures_.size()), [&](int b) {
     const BlockMeasure& m = measures_[static_cast<size_t>(b)];
-    const int x0 = (b % blocksX_) * kMeasureBlock, y0 = (b / blocksX_) * kMeasureBlock;
-    const int x1 = std::min(width_, x0 + kMeasureBlock), y1 = std::min(height_, y0 + kMeasureBlock);
-    // The block's pixels that record (a table and, under auto's region map, a q above 0: where its
-    // pilot measured tracking ahead they stay so); per channel, their variance-weighted mean of
-    // 1 / (mean^2 + eps), which turns a change of variance into one of relative variance.
+    const BlockRect r = blockRect(static_cast<size_t>(b));
+    // Per channel, the measured pixels' variance-weighted mean of 1 / (mean^2 + eps), which turns a
+    // change of variance into one of relative variance.
     double pixels = 0.0;
     double blockVariance[3] = {0.0, 0.0, 0.0}, blockRelative[3] = {0.0, 0.0, 0.0}, blockInverse[3] = {0.0, 0.0, 0.0};
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
+    for (int y = r.y0; y < r.y1; ++y)
+      for (int x = r.x0; x < r.x1; ++x) {
+        if (!measured(x, y)) continue;
         const size_t i = index(x, y);
-        if (!present_[i] || !(guidedProbabilityAt(scene, x, y, width_, height_) > 0.0f)) continue;
         pixels += 1.0;
         for (int ch = 0; ch < 3; ++ch) {
           const size_t k = 3 * i + static_cast<size_t>(ch);
@@ -280,11 +281,9 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
       }
       if (score < bestScore) bestScore = score, best = static_cast<float>(q);
     }
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
-        const size_t i = index(x, y);
-        if (present_[i] && guidedProbabilityAt(scene, x, y, width_, height_) > 0.0f) guides_[i].guidedProbability = best;
-      }
+    for (int y = r.y0; y < r.y1; ++y)
+      for (int x = r.x0; x < r.x1; ++x)
+        if (measured(x, y)) guides_[index(x, y)].guidedProbability = best;
   });
   ++measuredDecisions_;
   return true;

@@ -38,8 +38,8 @@
 #include "integrator.h"
 #include "scene.h"
 
+#include <algorithm>
 #include <array>
-
 #include <string>
 #include <vector>
 
@@ -114,6 +114,14 @@ class CameraGuides {
   size_t index(int x, int y) const { return static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x); }
   size_t block(int x, int y) const {
     return static_cast<size_t>(y / kMeasureBlock) * static_cast<size_t>(blocksX_) + static_cast<size_t>(x / kMeasureBlock);
+  }
+  struct BlockRect {
+    int x0, y0, x1, y1;
+  };
+  BlockRect blockRect(size_t b) const {
+    const int x0 = static_cast<int>(b % static_cast<size_t>(blocksX_)) * kMeasureBlock;
+    const int y0 = static_cast<int>(b / static_cast<size_t>(blocksX_)) * kMeasureBlock;
+    return {x0, y0, std::min(width_, x0 + kMeasureBlock), std::min(height_, y0 + kMeasureBlock)};
   }
   // Sums over a block's recorded samples. D: the camera vertex's direct light; R: the rest of the
   // sample.

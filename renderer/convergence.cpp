@@ -135,13 +135,14 @@ PixelMoments pixelMoments(const Film& film) {
   return m;
 }
 
+double relativeEpsilon(double meanValue) { return (0.1 * meanValue) * (0.1 * meanValue) + 1e-30; }
+
 namespace {
-// The relMSE's eps for a shared mean image: (0.1 x its mean)^2.
+// The relMSE's eps for a shared mean image.
 double relativeEps(const std::vector<float>& mean) {
   double meanOfMean = 0.0;
   for (float v : mean) meanOfMean += v;
-  meanOfMean /= static_cast<double>(std::max<size_t>(1, mean.size()));
-  return (0.1 * meanOfMean) * (0.1 * meanOfMean) + 1e-30;
+  return relativeEpsilon(meanOfMean / static_cast<double>(std::max<size_t>(1, mean.size())));
 }
 }  // namespace
 

@@ -40,6 +40,8 @@ struct PixelMoments {
   std::vector<float> mean, variance;
 };
 PixelMoments pixelMoments(const Film& film);
+// The relMSE's eps for an image whose mean over pixels and channels is `meanValue`: (0.1 x it)^2.
+double relativeEpsilon(double meanValue);
 // The relMSE one sample per pixel would have if `mean` were the reference: the mean over pixels and
 // channels of variance / (mean^2 + eps), eps as the relMSE's.
 double relativeVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean);

@@ -155,8 +155,7 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
       if (!chosen && guide->table()) pixel.guided_probability = guide->guidedProbability;
     }
     GuideInspection r = inspectGuideAlongRay(scene, camera, 0, pixel);
-    if (!chosen && r.guided && g.measured_pixel_probability && g.combination == GuideCombination::OneSample &&
-        g.guided_vertex == GuidedVertex::Direct)
+    if (!chosen && r.guided && measuresPixelProbability(g))
       r.note = "q shown is the probes' prediction; a render then sets the pixel's q from its own samples "
                "(guiding.measured_pixel_probability)";
     return r;

@@ -54,12 +54,8 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
           Rng rng(hashCombine(pixelKey, static_cast<uint64_t>(firstSample + s)), pixelKey);
           const float jx = rng.uniform(), jy = rng.uniform();
           const Ray ray = camera.generate(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
-          if (!measure) {
-            pass.addSample(x, y, tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng));
-            continue;
-          }
           PathTracer::CameraVertexRecord record;
-          const Rgb value = tracer.radiance(ray, cameraGuides_.at(x, y), rng, &record);
+          const Rgb value = tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng, measure ? &record : nullptr);
           pass.addSample(x, y, value);
           if (record.table) cameraGuides_.record(x, y, record, value);
         }

@@ -245,6 +245,11 @@ struct GuidingSettings {
   }
 };
 
+// guiding.measured_pixel_probability takes effect under one-sample MIS with a direct guided vertex.
+inline bool measuresPixelProbability(const GuidingSettings& g) {
+  return g.measured_pixel_probability && g.combination == GuideCombination::OneSample && g.guided_vertex == GuidedVertex::Direct;
+}
+
 struct StrategySettings {
   std::string preset = "conventional";
   MajorantPolicy majorant;
