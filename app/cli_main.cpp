@@ -345,7 +345,19 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     // far lower noise than any preset gives in the same time is one command, cached like the rest.
     std::vector<std::string> referenceSets = sets;
     referenceSets.insert(referenceSets.end(), refSets.begin(), refSets.end());
-    SceneDesc refDesc = sceneWith(scenePath, refStrategy, referenceSets);
+    // The --set edits checked alone first, so that an error from here on is a --reference-set's and
+    // says so.
+    sceneWith(scenePath, refStrategy, sets);
+    SceneDesc refDesc;
+    try {
+      refDesc = sceneWith(scenePath, refStrategy, referenceSets);
+    } catch (const InputError& e) {
+      std::string what = e.what();
+      const std::string setLabel = "(--set ";
+      if (const size_t at = what.find(setLabel); at != std::string::npos) what.replace(at, setLabel.size(), "(--reference-set ");
+      else what = "--reference-set: " + what;
+      throw InputError(what);
+    }
     std::string cachePath;
     std::string edits;
     for (const auto& e : refSets) edits += ", --reference-set " + e;
