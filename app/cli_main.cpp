@@ -347,7 +347,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     referenceSets.insert(referenceSets.end(), refSets.begin(), refSets.end());
     // The --set edits checked alone first, so that an error from here on is a --reference-set's and
     // says so.
-    sceneWith(scenePath, refStrategy, sets);
+    loadSceneDesc(scenePath, sets, refStrategy);
     SceneDesc refDesc;
     try {
       refDesc = sceneWith(scenePath, refStrategy, referenceSets);

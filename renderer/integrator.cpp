@@ -649,10 +649,16 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng,
     const bool guidedPicked = guided && (!oneSample || rng.uniform() < guide.guidedProbability);
     const bool shareWalk = guidedPicked && oneSample;
     const SegmentWalk walk = walkSegment(st, tEnd, guided || rec, shareWalk ? &scratch.walked() : nullptr, emissionWeight, L, rng);
-    if (rec && !guidedPicked && walk.event == SegmentWalk::Event::Scattered) {
-      rec->guidedPdf = guided ? guide.pdf(walk.scatterT) : cameraGuide->table()->pdf(walk.scatterT);
-      rec->trackedPdf = walk.nullProbability * walk.scatterDensity;
-    }
+    // The tracked vertex's p_g and p_t, evaluated once: its MIS weight on a guided segment needs
+    // them unless one-sample MIS picked the guided vertex (the tracked one then counts for
+    // nothing), and a measured pixel records them (where its q is 0 the segment has no guide, and
+    // the pixel's table is the same density).
+    const bool scattered = walk.event == SegmentWalk::Event::Scattered;
+    const bool trackedCounts = scattered && !(oneSample && guidedPicked);
+    const float scatterGuidedPdf =
+        trackedCounts && guided ? guide.pdf(walk.scatterT) : trackedCounts && rec ? cameraGuide->table()->pdf(walk.scatterT) : 0.0f;
+    const float scatterTrackedPdf = walk.nullProbability * walk.scatterDensity;
+    if (rec && trackedCounts) rec->guidedPdf = scatterGuidedPdf, rec->trackedPdf = scatterTrackedPdf;
 
     // The tracked scattering's MIS weight on a guided segment (docs/method.md s.4): on its NEE only in
     // guided_vertex = direct (the continuation is the tracked technique's alone, unweighted), or
@@ -662,12 +668,12 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng,
     float trackedDirect = 1.0f, trackedContinue = 1.0f;
     if (guided) {
       const float q = guide.guidedProbability;
-      if (walk.event == SegmentWalk::Event::Scattered) {
-        const float pg = guide.pdf(walk.scatterT);
-        const float pt = walk.nullProbability * walk.scatterDensity;
-        float trackedWeight = pg > 0.0f ? 1.0f - guidedWeight(pt / pg, q) : 1.0f;
-        // p_t / (q p_g + (1 - q) p_t) when the tracked vertex was picked, else nothing.
-        if (oneSample) trackedWeight = guidedPicked ? 0.0f : pt / (q * pg + (1.0f - q) * pt);
+      if (scattered) {
+        const float pg = scatterGuidedPdf, pt = scatterTrackedPdf;
+        // One-sample MIS: p_t / (q p_g + (1 - q) p_t) when the tracked vertex was picked, else nothing.
+        const float trackedWeight = oneSample   ? (guidedPicked ? 0.0f : pt / (q * pg + (1.0f - q) * pt))
+                                    : pg > 0.0f ? 1.0f - guidedWeight(pt / pg, q)
+                                                : 1.0f;
         if (strategy.guiding.guided_vertex == GuidedVertex::Path) {
           st.beta *= trackedWeight;
           trackedContinue = trackedWeight;
@@ -690,7 +696,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng,
     }
     if (walk.event == SegmentWalk::Event::Absorbed) break;
 
-    if (walk.event == SegmentWalk::Event::Scattered) {
+    if (scattered) {
       if (isBlack(st.beta)) break;
       const Rgb before = L;
       const bool continues = scatterVertex(st, walk.scatterPos, walk.scatterG, L, rng, trackedContinue, trackedDirect);
