@@ -69,10 +69,12 @@ class Medium {
     if (!(c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f && c.x < res.x && c.y < res.y && c.z < res.z)) return 0.0f;
     return cellMajorant_[static_cast<size_t>(majorant_.cellIndex(static_cast<int>(c.x), static_cast<int>(c.y), static_cast<int>(c.z)))];
   }
-  // The radiance scale of the medium's emission: its mean Le over emitting cells weighted by mu_a
-  // (radiance units), or its mean E times the voxel size (per unit length). The emission weight's
-  // unit when it is relative.
+  // The radiance scale of the medium's emission: its mean Le over emitting cells weighted by mu_a,
+  // times 1 - exp(-tau_a) across them (radiance units: what a ray through it gathers), or its mean E
+  // times the voxel size (per unit length). The emission weight's unit when it is relative.
   float emissionRadianceScale() const { return radianceScale_; }
+  // The absorption optical depth across the emitting cells that scales it (0 per unit length).
+  float emissionOpticalDepth() const { return emissionDepth_; }
   // Geometric-mean voxel edge in world units (the emission cap's c / voxel_size).
   float voxelSize() const { return voxelSize_; }
   // The emissive volume as a light (null unless emissive and light sampling is on).
@@ -130,6 +132,7 @@ class Medium {
   int coarsening_ = 1;  // majorant cells are this many times strategy.majorant.cell_size
   std::vector<float> emissionMaxima_;  // per majorant cell: max of lum(source) over the footprint
   float radianceScale_ = 0.0f;
+  float emissionDepth_ = 0.0f;  // tau_a across the emitting cells (radianceScale_)
   std::unique_ptr<EmissionLight> emissionLight_;
   std::vector<float> cellMajorant_;
   std::vector<float> transmittanceMajorant_;

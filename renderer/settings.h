@@ -32,7 +32,7 @@ struct MajorantPolicy {
   bool coarsen_thin = true;      // media that emit nothing: coarser cells where that costs less
   bool emission_term = false;    // raise mu_bar where mu_a * Le is large
   float emission_weight = 1.0f;  // k: collisions per unit length per unit of mu_a * lum(Le)
-  bool relative_weight = false;  // k is dimensionless: relative to each medium's mean emission
+  bool relative_weight = false;  // k is dimensionless: relative to the emission a ray through each medium gathers
   float emission_cap = 1.0f;     // c: emission-driven rate capped at c collisions per voxel; 0 = no cap
   float safety_factor = 1.0f;    // multiplies every majorant; >= 1
 
@@ -46,8 +46,9 @@ struct MajorantPolicy {
     v.field("emission_term", emission_term, "Raise the majorant where emission is bright, so collisions (and emission gathering) concentrate there (talk 2.1)");
     v.field("emission_weight", emission_weight, "k: converts mu_a * lum(Le) into a collision rate; 0 turns the emission term off", Range{0.0, 1e9});
     v.field("relative_weight", relative_weight,
-            "k relative to each medium's mean emission (dimensionless: k = 1 puts the emission-driven rate at mu_a where Le is "
-            "at its absorption-weighted mean), so one value fits any emission scale; off: k in units of 1 / radiance");
+            "k relative to what a ray through each medium gathers, its absorption-weighted mean Le times 1 - exp(-tau_a) "
+            "(dimensionless: a ray through a thin emitter gets about k emission collisions, a dense one k per unit of absorption "
+            "depth), so one value fits any emission scale and density; off: k in units of 1 / radiance");
     v.field("emission_cap", emission_cap,
             "c: the emission-driven rate is capped at c / voxel size (collisions per voxel); 0 = the renderer's largest cap, "
             "1000 per voxel",

@@ -201,5 +201,36 @@ TEST(EmissionMajorant, PolicyEditsRebuildOnlyWhatDependsOnThem) {
   EXPECT_EQ(m.emissionLight()->cellSize(), 8);
 }
 
+// A relative emission weight k gives a ray through a thin emitter about k emission collisions, as
+// through a dense one k per unit of absorption depth (medium.cpp: the radiance scale is what a ray
+// gathers, Le (1 - exp(-tau_a))). Relative to Le alone, a thin emitter's rays got about k tau_a.
+TEST(EmissionMajorant, ARelativeWeightGivesAThinEmittersRaysAboutKCollisions) {
+  constexpr float k = 10.0f;
+  for (float sigmaT : {0.05f, 0.5f, 5.0f}) {
+    SceneDesc desc = test::loadScene("assets/scenes/test/emission-slab.json",
+                                     {"strategy.preset=\"emission\"", "strategy.majorant.relative_weight=true",
+                                      "strategy.majorant.emission_weight=" + std::to_string(k), "volumes.0.generator.size=[1,1,1]",
+                                      "volumes.0.sigma_t_scale=" + std::to_string(sigmaT)});
+    const auto scene = Scene::build(desc);
+    const Medium& m = *scene->mediaOwned()[0];
+    // A unit cube's mean chord is 2/3; the cells padding it stretch that a little.
+    const float tau = m.emissionOpticalDepth();
+    EXPECT_GT(tau, 0.8f * sigmaT * 2.0f / 3.0f) << "sigma_t " << sigmaT;
+    EXPECT_LT(tau, 1.6f * sigmaT * 2.0f / 3.0f) << "sigma_t " << sigmaT;
+    // Expected collisions on the centre ray through the cube (z from -1 to 1): the integral of mu_bar,
+    // the emission-driven rate wherever it exceeds mu_t.
+    double collisions = 0.0;
+    constexpr int kSteps = 4000;
+    for (int i = 0; i < kSteps; ++i) {
+      const Vec3 p(0.0f, 0.0f, -1.0f + 2.0f * (i + 0.5f) / kSteps);
+      const Vec3 index = Vec3(m.indexFromWorld() * glm::vec4(p, 1.0f));
+      collisions += m.majorantAt(index) * (2.0 / kSteps);
+    }
+    const double expected = k * std::max(1.0, static_cast<double>(sigmaT));  // k, or k per unit of tau_a
+    EXPECT_GT(collisions, 0.5 * expected) << "sigma_t " << sigmaT;
+    EXPECT_LT(collisions, 2.5 * expected) << "sigma_t " << sigmaT;
+  }
+}
+
 }  // namespace
 }  // namespace candela
