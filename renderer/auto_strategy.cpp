@@ -270,19 +270,23 @@ AutoDecision decide(Scene& scene) {
   ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
   // other pilot image) and measures it; `regions` (for "full, by region") are applied after its
-  // strategy. The per-pixel moments go to `moments`.
-  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, PixelMoments& moments) {
+  // strategy. The per-pixel moments go to `moments`. An image not kept (the rival's second look in
+  // the fresh round below) renders from indices the image never uses, so the kept ones stay 0 to
+  // kept.spp() - 1, where the render continues.
+  int nextUnkeptSample = 1 << 28;
+  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, PixelMoments& moments, bool keepSamples = true) {
     const bool hadProbes = scene.probes() != nullptr;
     scene.setStrategy(c.strategy);
     if (map) scene.setGuidedRegions(*map);
     if (!hadProbes && scene.probes()) d.probeSeconds += scene.probes()->learnSeconds();
-    renderer.setFirstSample(nextSample);
-    nextSample += d.pilotSpp;
+    int& first = keepSamples ? nextSample : nextUnkeptSample;
+    renderer.setFirstSample(first);
+    first += d.pilotSpp;
     const WorkCounters before = renderer.work();
     Film film;
     renderer.renderBudget(film, d.pilotSpp, 0.0, d.pilotSpp);
     const WorkCounters work = renderer.work() - before;
-    if (keep) kept.addPass(film);
+    if (keep && keepSamples) kept.addPass(film);
     moments = pixelMoments(film);
     share(moments);
     AutoMeasurement m;
@@ -367,12 +371,20 @@ AutoDecision decide(Scene& scene) {
     if (candidates[i].name == "full") fullIndex = i;
   std::vector<AutoCandidate> refinements;
   images.reserve(candidates.size() + 3);
+  // Under a sun the plain candidate's image only measures, as the fresh round's rival does: where
+  // a sun shines into the media the guided candidates either win by far, the plain candidate's
+  // variance per sample by MSE 4-6 times theirs (god-rays-dark, god-rays-backlit), or lose by a few
+  // percent (god-rays), so its kept samples cost the first far more than dropping them costs the
+  // second (docs/performance.md, "The pilot's second look at the rival"). A rule of the scene,
+  // fixed before any sample is drawn: the kept samples stay unbiased (docs/method.md 4b).
+  const bool keepPlain = !scene.sunLit();
+  if (keep && !keepPlain) d.reasons.push_back("a sun shines into the media: the plain candidate's pilot image only measures");
   for (size_t i = 0; i < candidates.size(); ++i) {
     if (i != 0 && i != fullIndex) {
       refinements.push_back(candidates[i]);
       continue;
     }
-    d.pilot.push_back(measure(candidates[i], nullptr, images.emplace_back()));
+    d.pilot.push_back(measure(candidates[i], nullptr, images.emplace_back(), i != 0 || keepPlain));
   }
   candidates.erase(std::remove_if(candidates.begin() + 1, candidates.end(), [](const AutoCandidate& c) { return c.name != "full"; }),
                    candidates.end());
@@ -452,7 +464,11 @@ AutoDecision decide(Scene& scene) {
       PixelMoments freshImage, freshImage2, rivalImage;
       const AutoMeasurement fresh = measure(candidates[challenger], map, freshImage);
       const AutoMeasurement fresh2 = measure(candidates[challenger], map, freshImage2);
-      const AutoMeasurement rivalAgain = measure(candidates[rival], nullptr, rivalImage);
+      // The rival's second image only measures: kept, it would add the samples of the candidate
+      // about to lose to the image (on god-rays-dark the plain candidate's, at 5 times full's
+      // variance per sample, 4 of the pilot's 14 samples per pixel instead of 2). Not keeping it is a
+      // rule fixed before any sample is drawn, so the kept samples stay unbiased.
+      const AutoMeasurement rivalAgain = measure(candidates[rival], nullptr, rivalImage, false);
       // Pooled per candidate: the mean of its images' variances (against the shared mean) and work.
       std::vector<AutoMeasurement> pair{fresh, fresh2, d.pilot[rival], rivalAgain};
       score(pair, {&freshImage, &freshImage2, &images[rival], &rivalImage});

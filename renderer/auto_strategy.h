@@ -18,8 +18,9 @@
 //    leading the pilot (by sqrt(kAutoMargin) against the plain one, by kAutoMargin against full).
 //    The same seed gives the same decision on any machine and thread count. An image small enough
 //    is piloted as it is, on sample indices of its own per candidate, and the pilot's samples stay
-//    in the image (AutoDecision::pilotFilm): the pilot then costs only the difference between the
-//    candidates it tried and the one it chose.
+//    in the image (AutoDecision::pilotFilm), but for the images that only measure (a fresh round's
+//    second look at its rival, and under a sun the plain candidate's): the pilot then costs the
+//    difference between the candidates it kept and the one it chose, and those images' work.
 // Every candidate is an unbiased strategy: the choice changes the noise, never the image.
 #pragma once
 
@@ -88,7 +89,9 @@ struct AutoDecision {
   // preset its build.
   double probeSeconds = 0.0;
   int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;  // pilotSpp: per candidate image
-  // Every pilot image's samples summed, when the pilot rendered the image itself (at most
+  // Every kept pilot image's samples summed (all but a fresh round's second look at its rival and,
+  // under a sun, the plain candidate's image: docs/method.md 4b), when the pilot rendered the image
+  // itself (at most
   // kPilotSamples pixels): sample indices 0 to pilotFilm->spp() - 1 of the scene's seed, to be
   // continued from (continueFromPilot). Null when the pilot rendered a reduced copy.
   std::shared_ptr<const Film> pilotFilm;

@@ -227,9 +227,13 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
   const double most = std::max(g.guided_probability, g.bright_pixel_probability);
   // The image's variance per sample, its relative variance (the relMSE's, per channel, eps = (0.1 x
   // the mean image's mean)^2) and its work per sample: a block's q' is weighed by how much it
-  // changes the logarithms of variance x work and relative variance x work together, so that
-  // neither is bought with the other. A block that drew no guided vertex (q was 0) prices one at
-  // the image's mean. All summed in a fixed order: the same on any thread count.
+  // changes the logarithms of variance x work and relative variance x work, summed (the product of
+  // the two efficiencies), so a block may give up a little of one for more of the other. Balanced
+  // instead (the blocks weighing the two so that the worse fell least short of its best) the
+  // choices measured x0.98-1.01 of these by each metric per unit of work on every report scene
+  // (docs/performance.md, "The pilot's second look at the rival"). A block that drew no guided
+  // vertex (q was 0) prices one at the image's mean. All summed in a fixed order: the same on any
+  // thread count.
   const double filmSpp = std::max(1, film.spp());
   const std::vector<float>& sum = film.sum();
   const std::vector<float>& sumSquares = film.sumSquares();

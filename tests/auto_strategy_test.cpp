@@ -294,13 +294,32 @@ TEST(AutoStrategy, ThePilotsSamplesStartTheImageOfTheViewTheyWereRenderedFor) {
   EXPECT_EQ(d->pilotWidth, 96);
   EXPECT_EQ(d->pilotSpp, 8);
   // Each fresh round ("measured again": against full, then against the standing candidate) renders
-  // three more images.
-  int rounds = 0;
-  for (const std::string& r : d->reasons) rounds += r.find("measured again") != std::string::npos;
-  const int images = static_cast<int>(d->pilot.size()) + 3 * rounds;
+  // three more images and keeps the challenger's two: the rival's second look only measures. Under
+  // god-rays-dark's sun the plain candidate's first image only measures too.
+  int rounds = 0, measuresOnly = 0;
+  for (const std::string& r : d->reasons) {
+    rounds += r.find("measured again") != std::string::npos;
+    measuresOnly += r.find("the plain candidate's pilot image only measures") != std::string::npos;
+  }
+  ASSERT_GT(rounds, 0) << d->summary();
+  ASSERT_EQ(measuresOnly, 1) << d->summary();
+  const int images = static_cast<int>(d->pilot.size()) - 1 + 2 * rounds;
   EXPECT_EQ(d->pilotFilm->spp(), images * d->pilotSpp) << d->summary();
   EXPECT_NE(d->summary().find(std::to_string(d->pilotFilm->spp()) + " spp kept in the image"), std::string::npos) << d->summary();
   const int kept = d->pilotFilm->spp();
+  {
+    // Without a sun the plain candidate's first image stays (fire).
+    const auto unlit = Scene::build(test::loadScene("assets/scenes/fire.json", {"strategy.preset=\"auto\"", "camera.resolution=[96,96]"}));
+    const AutoDecision* u = unlit->autoDecision();
+    ASSERT_NE(u, nullptr);
+    ASSERT_NE(u->pilotFilm, nullptr) << u->summary();
+    int unlitRounds = 0;
+    for (const std::string& r : u->reasons) {
+      unlitRounds += r.find("measured again") != std::string::npos;
+      EXPECT_EQ(r.find("only measures"), std::string::npos) << r;
+    }
+    EXPECT_EQ(u->pilotFilm->spp(), (static_cast<int>(u->pilot.size()) + 2 * unlitRounds) * u->pilotSpp) << u->summary();
+  }
   EXPECT_EQ(continueFromPilot(*scene, 0).spp(), kept);
   EXPECT_EQ(continueFromPilot(*scene, kept).spp(), kept);
   EXPECT_EQ(continueFromPilot(*scene, kept - 1).spp(), 0) << "more samples than asked for";
