@@ -270,9 +270,9 @@ AutoDecision decide(Scene& scene) {
   ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
   // other pilot image) and measures it; `regions` (for "full, by region") are applied after its
-  // strategy. The per-pixel moments go to `moments`. An image not kept (the rival's second look in
-  // the fresh round below) renders from indices the image never uses, so the kept ones stay 0 to
-  // kept.spp() - 1, where the render continues.
+  // strategy. The per-pixel moments go to `moments`. An image that only measures (!keepSamples: the
+  // fresh round's second look at its rival, the plain candidate's under a sun) renders from indices
+  // the image never uses, so the kept ones stay 0 to kept.spp() - 1, where the render continues.
   int nextUnkeptSample = 1 << 28;
   auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, PixelMoments& moments, bool keepSamples = true) {
     const bool hadProbes = scene.probes() != nullptr;

@@ -91,9 +91,8 @@ struct AutoDecision {
   int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;  // pilotSpp: per candidate image
   // Every kept pilot image's samples summed (all but a fresh round's second look at its rival and,
   // under a sun, the plain candidate's image: docs/method.md 4b), when the pilot rendered the image
-  // itself (at most
-  // kPilotSamples pixels): sample indices 0 to pilotFilm->spp() - 1 of the scene's seed, to be
-  // continued from (continueFromPilot). Null when the pilot rendered a reduced copy.
+  // itself (at most kPilotSamples pixels): sample indices 0 to pilotFilm->spp() - 1 of the scene's
+  // seed, to be continued from (continueFromPilot). Null when the pilot rendered a reduced copy.
   std::shared_ptr<const Film> pilotFilm;
   std::string pilotView;  // the camera and render settings pilotFilm was rendered with (JSON)
   // When the choice is "full, by region": where the camera rays take guided vertices.

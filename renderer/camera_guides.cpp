@@ -231,7 +231,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
   // the two efficiencies), so a block may give up a little of one for more of the other. Balanced
   // instead (the blocks weighing the two so that the worse fell least short of its best) the
   // choices measured x0.98-1.01 of these by each metric per unit of work on every report scene
-  // (docs/performance.md, "The pilot's second look at the rival"). A block that drew no guided
+  // (docs/performance.md, "Measured q balanced between the metrics"). A block that drew no guided
   // vertex (q was 0) prices one at the image's mean. All summed in a fixed order: the same on any
   // thread count.
   const double filmSpp = std::max(1, film.spp());
