@@ -80,7 +80,6 @@ struct Run {
   std::string note;   // auto: what it decided and why
   Film film;          // at the largest budget
   double seconds = 0.0;
-  double work = 0.0;  // counted work (work.h) at the largest budget, auto's pilot included
   ErrorMetrics error;
 };
 
@@ -95,10 +94,52 @@ Efficiency efficiencyOf(const std::string& strategy, const ErrorMetrics& e, doub
   return {strategy, 1.0 / (e.relmse * seconds), 1.0 / (e.mse * seconds), 1.0 / (e.relmse * work), 1.0 / (e.mse * work)};
 }
 
+// Field by field: a / b (the ratio of two renders' efficiencies), max(a, b) (the best of several).
+Efficiency ratioOf(const Efficiency& a, const Efficiency& b) {
+  return {a.strategy, a.relTime / b.relTime, a.mseTime / b.mseTime, a.relWork / b.relWork, a.mseWork / b.mseWork};
+}
+Efficiency bestOf(const Efficiency& a, const Efficiency& b) {
+  return {a.relTime >= b.relTime ? a.strategy : b.strategy, std::max(a.relTime, b.relTime), std::max(a.mseTime, b.mseTime),
+          std::max(a.relWork, b.relWork), std::max(a.mseWork, b.mseWork)};
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n == 0 ? NAN : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Field by field, the median over several seeds' ratios.
+Efficiency medianOf(const std::vector<Efficiency>& v) {
+  auto field = [&](double Efficiency::*f) {
+    std::vector<double> values;
+    for (const Efficiency& e : v) values.push_back(e.*f);
+    return median(values);
+  };
+  return {"", field(&Efficiency::relTime), field(&Efficiency::mseTime), field(&Efficiency::relWork), field(&Efficiency::mseWork)};
+}
+
+// One strategy's render of the scene with a seed, auto's decision made: what the report charges it
+// (its decision's time, rules, probes and pilot, less the probes' learning, which no fixed preset is
+// charged for either; the pilot's counted work) and how it is named ("auto (full)").
+struct SeededRender {
+  std::shared_ptr<Scene> scene;
+  std::string strategy;
+  std::string note;  // auto: what it decided and why
+  double pilotSeconds = 0.0, pilotWork = 0.0;
+};
+
+SeededRender startRender(const SceneDesc& base, const std::string& preset, uint64_t seed) {
+  SceneDesc desc = base;
+  desc.strategy = strategyPreset(preset);
+  desc.render.seed = seed;
+  SeededRender r;
+  r.scene = Scene::build(desc), r.strategy = preset;
+  if (const AutoDecision* d = r.scene->autoDecision()) {
+    r.strategy = "auto (" + d->label() + ")", r.note = d->summary();
+    r.pilotSeconds = d->pilotSeconds - d->probeSeconds, r.pilotWork = d->pilotWork;
+  }
+  return r;
 }
 
 // The seeds the report renders every strategy with at the largest budget, side by side per seed. The
@@ -148,29 +189,22 @@ int runReport(bool quick, const std::string& dir, int threads) {
     // efficiencies[seed][preset], at the largest budget
     std::vector<std::vector<Efficiency>> efficiencies(kEfficiencySeeds.size());
     for (const auto& preset : presets) {
-      SceneDesc desc = base;
-      desc.strategy = strategyPreset(preset);
-      desc.render.seed = kEfficiencySeeds[0];
-      auto scene = Scene::build(desc);
-      ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
+      const SeededRender start = startRender(base, preset, kEfficiencySeeds[0]);
+      ProgressiveRenderer renderer(start.scene, RenderOptions{threads, 16});
       Run run;
-      run.strategy = preset;
-      // auto's decision (rules, probes, pilot) is charged to its time and its work: it renders for
-      // what is left.
-      const AutoDecision* decision = scene->autoDecision();
-      const double pilot = decision ? decision->pilotSeconds - decision->probeSeconds : 0.0;
-      const double pilotWork = decision ? decision->pilotWork : 0.0;
-      if (decision) run.strategy = "auto (" + decision->label() + ")", run.note = decision->summary();
+      run.strategy = start.strategy, run.note = start.note;
+      // auto renders for what is left of each budget after its decision.
+      double work = 0.0;
       for (double budget : budgets) {
-        Film film = continueFromPilot(*scene, 0);  // auto's pilot samples, where it kept them
+        Film film = continueFromPilot(*start.scene, 0);  // auto's pilot samples, where it kept them
         const double workBefore = renderer.work().cost();
-        const double t = pilot + renderer.renderBudget(film, 1 << 24, std::max(0.01, budget - pilot), 1);
+        const double t = start.pilotSeconds + renderer.renderBudget(film, 1 << 24, std::max(0.01, budget - start.pilotSeconds), 1);
         const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
         points.push_back({run.strategy, budget, t, film.spp(), e.mse, e.relmse, film.rejectedSamples()});
         if (budget == budgets.back())
-          run.film = film, run.seconds = t, run.error = e, run.work = pilotWork + renderer.work().cost() - workBefore;
+          run.film = film, run.seconds = t, run.error = e, work = start.pilotWork + renderer.work().cost() - workBefore;
       }
-      efficiencies[0].push_back(efficiencyOf(run.strategy, run.error, run.seconds, run.work));
+      efficiencies[0].push_back(efficiencyOf(run.strategy, run.error, run.seconds, work));
       std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), preset.c_str(), run.error.relmse, run.seconds, run.film.spp());
       std::fflush(stdout);
       runs.push_back(std::move(run));
@@ -178,18 +212,12 @@ int runReport(bool quick, const std::string& dir, int threads) {
     // The further seeds, every strategy at the largest budget only (auto decides afresh per seed).
     for (size_t s = 1; s < kEfficiencySeeds.size(); ++s)
       for (const auto& preset : presets) {
-        SceneDesc desc = base;
-        desc.strategy = strategyPreset(preset);
-        desc.render.seed = kEfficiencySeeds[s];
-        auto scene = Scene::build(desc);
-        ProgressiveRenderer renderer(scene, RenderOptions{threads, 16});
-        const AutoDecision* decision = scene->autoDecision();
-        const double pilot = decision ? decision->pilotSeconds - decision->probeSeconds : 0.0;
-        Film film = continueFromPilot(*scene, 0);
-        const double t = pilot + renderer.renderBudget(film, 1 << 24, std::max(0.01, budgets.back() - pilot), 1);
-        const double work = (decision ? decision->pilotWork : 0.0) + renderer.work().cost();
+        const SeededRender start = startRender(base, preset, kEfficiencySeeds[s]);
+        ProgressiveRenderer renderer(start.scene, RenderOptions{threads, 16});
+        Film film = continueFromPilot(*start.scene, 0);
+        const double t = start.pilotSeconds + renderer.renderBudget(film, 1 << 24, std::max(0.01, budgets.back() - start.pilotSeconds), 1);
         const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
-        efficiencies[s].push_back(efficiencyOf(decision ? "auto (" + decision->label() + ")" : preset, e, t, work));
+        efficiencies[s].push_back(efficiencyOf(start.strategy, e, t, start.pilotWork + renderer.work().cost()));
         std::printf("report: %s %s, seed %llu: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), preset.c_str(),
                     static_cast<unsigned long long>(kEfficiencySeeds[s]), e.relmse, t, film.spp());
         std::fflush(stdout);
@@ -219,52 +247,40 @@ int runReport(bool quick, const std::string& dir, int threads) {
     // median over the seeds.
     for (size_t a = 0; a < runs.size(); ++a) {
       if (runs[a].note.empty()) continue;
-      struct Ratios {
-        std::vector<double> relTime, mseTime, relWork, mseWork;
-      };
-      Ratios oracle;
-      std::vector<Ratios> each(presets.size());
+      std::vector<Efficiency> oracle;                  // per seed, against that seed's best preset
+      std::vector<std::vector<Efficiency>> each(presets.size());  // per preset, per seed
       std::string oracles, choices;
       for (size_t s = 0; s < kEfficiencySeeds.size(); ++s) {
         const Efficiency& mine = efficiencies[s][a];
         Efficiency best{"", 0.0, 0.0, 0.0, 0.0};
         for (size_t p = 0; p < presets.size(); ++p) {
           if (!runs[p].note.empty()) continue;
-          const Efficiency& other = efficiencies[s][p];
-          if (other.relTime > best.relTime) best.strategy = other.strategy, best.relTime = other.relTime;
-          best.mseTime = std::max(best.mseTime, other.mseTime);
-          best.relWork = std::max(best.relWork, other.relWork);
-          best.mseWork = std::max(best.mseWork, other.mseWork);
-          each[p].relTime.push_back(mine.relTime / other.relTime);
-          each[p].mseTime.push_back(mine.mseTime / other.mseTime);
-          each[p].relWork.push_back(mine.relWork / other.relWork);
-          each[p].mseWork.push_back(mine.mseWork / other.mseWork);
+          best = bestOf(best, efficiencies[s][p]);
+          each[p].push_back(ratioOf(mine, efficiencies[s][p]));
         }
-        oracle.relTime.push_back(mine.relTime / best.relTime);
-        oracle.mseTime.push_back(mine.mseTime / best.mseTime);
-        oracle.relWork.push_back(mine.relWork / best.relWork);
-        oracle.mseWork.push_back(mine.mseWork / best.mseWork);
+        oracle.push_back(ratioOf(mine, best));
         oracles += (s ? ", " : "") + best.strategy;
         choices += (s ? ", " : "") + mine.strategy;
       }
       std::ostringstream perSeed;
       perSeed << std::fixed << std::setprecision(2);
       for (size_t s = 0; s < kEfficiencySeeds.size(); ++s)
-        perSeed << (s ? ", x" : "x") << oracle.relTime[s] << " / x" << oracle.mseTime[s];
+        perSeed << (s ? ", x" : "x") << oracle[s].relTime << " / x" << oracle[s].mseTime;
+      const Efficiency oracleMedian = medianOf(oracle);
       char line[768];
       std::snprintf(line, sizeof(line),
                     "%s: x%.2f the best fixed preset by relMSE, x%.2f by MSE, its decision included (median of seeds %llu-%llu side by side; "
                     "per seed x relMSE / x MSE: %s; best preset by relMSE: %s). By counted work (no clock): x%.2f / x%.2f.",
-                    runs[a].strategy.c_str(), median(oracle.relTime), median(oracle.mseTime),
+                    runs[a].strategy.c_str(), oracleMedian.relTime, oracleMedian.mseTime,
                     static_cast<unsigned long long>(kEfficiencySeeds.front()), static_cast<unsigned long long>(kEfficiencySeeds.back()),
-                    perSeed.str().c_str(), oracles.c_str(), median(oracle.relWork), median(oracle.mseWork));
+                    perSeed.str().c_str(), oracles.c_str(), oracleMedian.relWork, oracleMedian.mseWork);
       std::ostringstream against;
       against << std::fixed << std::setprecision(2) << "Against each preset, by time (by work), relMSE / MSE, medians:";
       const char* separator = " ";
       for (size_t p = 0; p < presets.size(); ++p) {
         if (!runs[p].note.empty()) continue;
-        against << separator << presets[p] << " x" << median(each[p].relTime) << " / x" << median(each[p].mseTime) << " (x"
-                << median(each[p].relWork) << " / x" << median(each[p].mseWork) << ")";
+        const Efficiency m = medianOf(each[p]);
+        against << separator << presets[p] << " x" << m.relTime << " / x" << m.mseTime << " (x" << m.relWork << " / x" << m.mseWork << ")";
         separator = "; ";
       }
       against << ". Chose: " << choices << ".";
