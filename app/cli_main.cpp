@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <fstream>
 #include <sstream>
 
@@ -372,47 +373,65 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
 
   std::vector<ConvergencePoint> points;
   std::vector<SweepPoint> sweepPoints;
-  for (const auto& value : sweepValues)
-  for (const auto& strategy : strategies) {
-    std::vector<std::string> runSets = sets;
-    std::string label = strategy;
-    if (!sweepKey.empty()) {
-      runSets.push_back(sweepKey + "=" + value);
-      label = strategy + " " + sweepKey.substr(sweepKey.rfind('.') + 1) + "=" + value;
+  for (const auto& value : sweepValues) {
+    // Every strategy's scene (auto decides here), then each budget's renders side by side
+    // (renderSideBySide): the clock's swings fall on all strategies alike.
+    struct Contender {
+      std::string label, strategy, note;
+      std::shared_ptr<Scene> scene;
+      double pilot = 0.0, pilotWork = 0.0;  // auto's decision (rules, probes, pilot), charged to its time
+    };
+    std::vector<Contender> contenders;
+    for (const auto& strategy : strategies) {
+      std::vector<std::string> runSets = sets;
+      Contender c;
+      c.label = c.strategy = strategy;
+      if (!sweepKey.empty()) {
+        runSets.push_back(sweepKey + "=" + value);
+        c.label = strategy + " " + sweepKey.substr(sweepKey.rfind('.') + 1) + "=" + value;
+      }
+      SceneDesc desc = sceneWith(scenePath, strategy, runSets);
+      c.scene = buildScene(desc);
+      if (auto probes = c.scene->probes()) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%zu probes, %.2f s", probes->probes().size(), probes->learnSeconds());
+        c.note = buf;
+      }
+      if (reference.width != c.scene->camera().width() || reference.height != c.scene->camera().height())
+        throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
+                         ", expected the scene's " + std::to_string(c.scene->camera().width()) + "x" + std::to_string(c.scene->camera().height()));
+      if (const AutoDecision* d = c.scene->autoDecision()) c.pilot = d->pilotSeconds - d->probeSeconds, c.pilotWork = d->pilotWork;
+      contenders.push_back(std::move(c));
     }
-    SceneDesc desc = sceneWith(scenePath, strategy, runSets);
-    auto scene = buildScene(desc);
-    std::string note;
-    if (auto probes = scene->probes()) {
-      char buf[96];
-      std::snprintf(buf, sizeof buf, "%zu probes, %.2f s", probes->probes().size(), probes->learnSeconds());
-      note = buf;
-    }
-    if (reference.width != scene->camera().width() || reference.height != scene->camera().height())
-      throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
-                       ", expected the scene's " + std::to_string(scene->camera().width()) + "x" + std::to_string(scene->camera().height()));
-    // auto's decision (rules, probes, pilot) is charged to its time: it renders for what is left.
-    const double pilot = scene->autoDecision() ? scene->autoDecision()->pilotSeconds - scene->autoDecision()->probeSeconds : 0.0;
-    const double pilotWork = scene->autoDecision() ? scene->autoDecision()->pilotWork : 0.0;
     for (double budget : times) {
-      ProgressiveRenderer renderer(scene, RenderOptions{threads, 32});
-      Film film = continueFromPilot(*scene, 0);  // auto's pilot samples, where it kept them
-      ConvergencePoint p;
-      p.strategy = label;
-      p.budgetSeconds = budget;
-      p.seconds = pilot + renderer.renderBudget(film, 0, std::max(0.01, budget - pilot), 1);
-      p.spp = film.spp();
-      p.work = pilotWork + renderer.work().cost();
-      p.rejected = film.rejectedSamples();
-      const ErrorMetrics e = film.spp() > 0 ? imageError(film.meanImage(), reference.rgb) : ErrorMetrics{NAN, NAN};
-      p.mse = e.mse;
-      p.relmse = e.relmse;
-      points.push_back(p);
-      std::printf("%-14s budget %7.2f s  time %7.2f s  spp %6d  mse %.4g  relmse %.4g\n", label.c_str(), budget, p.seconds, p.spp,
-                  p.mse, p.relmse);
+      std::vector<std::unique_ptr<ProgressiveRenderer>> renderers;
+      std::vector<EqualTimeRun> sideBySide;
+      for (const Contender& c : contenders) {
+        renderers.push_back(std::make_unique<ProgressiveRenderer>(c.scene, RenderOptions{threads, 32}));
+        // auto renders for what is left of the budget, from its pilot's samples where it kept them.
+        sideBySide.push_back({renderers.back().get(), continueFromPilot(*c.scene, 0), c.pilot});
+      }
+      renderSideBySide(sideBySide, budget);
+      for (size_t i = 0; i < contenders.size(); ++i) {
+        const Contender& c = contenders[i];
+        const Film& film = sideBySide[i].film;
+        ConvergencePoint p;
+        p.strategy = c.label;
+        p.budgetSeconds = budget;
+        p.seconds = sideBySide[i].seconds;
+        p.spp = film.spp();
+        p.work = c.pilotWork + renderers[i]->work().cost();
+        p.rejected = film.rejectedSamples();
+        const ErrorMetrics e = film.spp() > 0 ? imageError(film.meanImage(), reference.rgb) : ErrorMetrics{NAN, NAN};
+        p.mse = e.mse;
+        p.relmse = e.relmse;
+        points.push_back(p);
+        std::printf("%-14s budget %7.2f s  time %7.2f s  spp %6d  mse %.4g  relmse %.4g\n", c.label.c_str(), budget, p.seconds, p.spp,
+                    p.mse, p.relmse);
+        if (budget == times.back() && !sweepKey.empty())
+          sweepPoints.push_back({c.strategy, sweepNumber(value), 1.0 / (p.relmse * p.seconds), c.note});
+      }
       std::fflush(stdout);
-      if (budget == times.back() && !sweepKey.empty())
-        sweepPoints.push_back({strategy, sweepNumber(value), 1.0 / (p.relmse * p.seconds), note});
     }
   }
   const std::string csv = (std::filesystem::path(outDir) / "convergence.csv").string();

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <iomanip>
 #include <sstream>
 #include <thread>
@@ -188,40 +189,63 @@ int runReport(bool quick, const std::string& dir, int threads) {
     std::vector<Run> runs;
     // efficiencies[seed][preset], at the largest budget
     std::vector<std::vector<Efficiency>> efficiencies(kEfficiencySeeds.size());
+    // Every strategy renders side by side (renderSideBySide): the clock's swings fall on all alike.
+    // Each budget starts afresh from auto's kept pilot samples; the renderers (and their camera-ray
+    // guide tables) carry over from one budget to the next.
+    std::vector<SeededRender> starts;
+    std::vector<std::unique_ptr<ProgressiveRenderer>> renderers;
     for (const auto& preset : presets) {
-      const SeededRender start = startRender(base, preset, kEfficiencySeeds[0]);
-      ProgressiveRenderer renderer(start.scene, RenderOptions{threads, 16});
-      Run run;
-      run.strategy = start.strategy, run.note = start.note;
-      // auto renders for what is left of each budget after its decision.
-      double work = 0.0;
-      for (double budget : budgets) {
-        Film film = continueFromPilot(*start.scene, 0);  // auto's pilot samples, where it kept them
-        const double workBefore = renderer.work().cost();
-        const double t = start.pilotSeconds + renderer.renderBudget(film, 1 << 24, std::max(0.01, budget - start.pilotSeconds), 1);
-        const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
-        points.push_back({run.strategy, budget, t, film.spp(), e.mse, e.relmse, film.rejectedSamples()});
-        if (budget == budgets.back())
-          run.film = film, run.seconds = t, run.error = e, work = start.pilotWork + renderer.work().cost() - workBefore;
-      }
-      efficiencies[0].push_back(efficiencyOf(run.strategy, run.error, run.seconds, work));
-      std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), preset.c_str(), run.error.relmse, run.seconds, run.film.spp());
-      std::fflush(stdout);
-      runs.push_back(std::move(run));
+      starts.push_back(startRender(base, preset, kEfficiencySeeds[0]));
+      renderers.push_back(std::make_unique<ProgressiveRenderer>(starts.back().scene, RenderOptions{threads, 16}));
+      runs.push_back(Run{});
+      runs.back().strategy = starts.back().strategy, runs.back().note = starts.back().note;
     }
-    // The further seeds, every strategy at the largest budget only (auto decides afresh per seed).
-    for (size_t s = 1; s < kEfficiencySeeds.size(); ++s)
-      for (const auto& preset : presets) {
-        const SeededRender start = startRender(base, preset, kEfficiencySeeds[s]);
-        ProgressiveRenderer renderer(start.scene, RenderOptions{threads, 16});
-        Film film = continueFromPilot(*start.scene, 0);
-        const double t = start.pilotSeconds + renderer.renderBudget(film, 1 << 24, std::max(0.01, budgets.back() - start.pilotSeconds), 1);
-        const ErrorMetrics e = imageError(film.meanImage(), reference.rgb);
-        efficiencies[s].push_back(efficiencyOf(start.strategy, e, t, start.pilotWork + renderer.work().cost()));
-        std::printf("report: %s %s, seed %llu: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), preset.c_str(),
-                    static_cast<unsigned long long>(kEfficiencySeeds[s]), e.relmse, t, film.spp());
-        std::fflush(stdout);
+    std::vector<double> works(presets.size(), 0.0);
+    for (double budget : budgets) {
+      std::vector<EqualTimeRun> sideBySide;
+      std::vector<double> workBefore;
+      for (size_t p = 0; p < presets.size(); ++p) {
+        // auto renders for what is left of each budget after its decision.
+        sideBySide.push_back({renderers[p].get(), continueFromPilot(*starts[p].scene, 0), starts[p].pilotSeconds});
+        workBefore.push_back(renderers[p]->work().cost());
       }
+      renderSideBySide(sideBySide, budget);
+      for (size_t p = 0; p < presets.size(); ++p) {
+        const EqualTimeRun& r = sideBySide[p];
+        const ErrorMetrics e = imageError(r.film.meanImage(), reference.rgb);
+        points.push_back({runs[p].strategy, budget, r.seconds, r.film.spp(), e.mse, e.relmse, r.film.rejectedSamples()});
+        if (budget == budgets.back())
+          runs[p].film = r.film, runs[p].seconds = r.seconds, runs[p].error = e,
+          works[p] = starts[p].pilotWork + renderers[p]->work().cost() - workBefore[p];
+      }
+    }
+    for (size_t p = 0; p < presets.size(); ++p) {
+      const Run& run = runs[p];
+      efficiencies[0].push_back(efficiencyOf(run.strategy, run.error, run.seconds, works[p]));
+      std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), presets[p].c_str(), run.error.relmse, run.seconds, run.film.spp());
+    }
+    std::fflush(stdout);
+    // The further seeds, every strategy at the largest budget only, side by side (auto decides afresh
+    // per seed).
+    for (size_t s = 1; s < kEfficiencySeeds.size(); ++s) {
+      std::vector<SeededRender> seeded;
+      std::vector<std::unique_ptr<ProgressiveRenderer>> seededRenderers;
+      std::vector<EqualTimeRun> sideBySide;
+      for (const auto& preset : presets) {
+        seeded.push_back(startRender(base, preset, kEfficiencySeeds[s]));
+        seededRenderers.push_back(std::make_unique<ProgressiveRenderer>(seeded.back().scene, RenderOptions{threads, 16}));
+        sideBySide.push_back({seededRenderers.back().get(), continueFromPilot(*seeded.back().scene, 0), seeded.back().pilotSeconds});
+      }
+      renderSideBySide(sideBySide, budgets.back());
+      for (size_t p = 0; p < presets.size(); ++p) {
+        const EqualTimeRun& r = sideBySide[p];
+        const ErrorMetrics e = imageError(r.film.meanImage(), reference.rgb);
+        efficiencies[s].push_back(efficiencyOf(seeded[p].strategy, e, r.seconds, seeded[p].pilotWork + seededRenderers[p]->work().cost()));
+        std::printf("report: %s %s, seed %llu: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), presets[p].c_str(),
+                    static_cast<unsigned long long>(kEfficiencySeeds[s]), e.relmse, r.seconds, r.film.spp());
+      }
+      std::fflush(stdout);
+    }
     const std::string svgPath = (fs::path(dir) / (name + ".svg")).string();
     writeConvergenceSvg(svgPath, points, name + ": relMSE vs time (equal time, 2 cores)");
     const std::string svg = readFile(svgPath);

@@ -117,4 +117,17 @@ double ProgressiveRenderer::renderBudget(Film& film, int spp, double seconds, in
   return elapsed();
 }
 
+void renderSideBySide(std::vector<EqualTimeRun>& runs, double budget, int passSpp) {
+  using Clock = std::chrono::steady_clock;
+  while (true) {
+    EqualTimeRun* next = nullptr;
+    for (EqualTimeRun& r : runs)
+      if ((r.seconds < budget || r.film.spp() == 0) && (!next || r.seconds < next->seconds)) next = &r;
+    if (!next) return;
+    const auto start = Clock::now();
+    next->renderer->renderPass(next->film, passSpp);
+    next->seconds += std::chrono::duration<double>(Clock::now() - start).count();
+  }
+}
+
 }  // namespace candela

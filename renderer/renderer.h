@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <functional>
+#include <vector>
 
 namespace candela {
 
@@ -58,5 +59,21 @@ class ProgressiveRenderer {
   Film pass_;
   WorkCounters work_;
 };
+
+// One strategy's render in an equal-time comparison (bench, report).
+struct EqualTimeRun {
+  ProgressiveRenderer* renderer = nullptr;
+  Film film;             // auto's kept pilot samples, or empty
+  double seconds = 0.0;  // charged so far: auto's decision (its pilot), then every pass rendered
+};
+
+// Renders every run until its `seconds` reach `budget`, side by side: one pass of `passSpp` at a
+// time, always of the run with the least time so far. Rendered one after another, each strategy
+// met the machine as it was then; the clock's 15-30% swings between runs of one command (another
+// process, a frequency change) then fell on one strategy and not its rival, and a ratio between two
+// of them moved by up to 15% between runs. Side by side, a slow spell falls on all alike. A pass is
+// never cut short (each is charged what it took: the last one overshoots the budget by one pass), and
+// every run renders at least one, so that each has an image to measure.
+void renderSideBySide(std::vector<EqualTimeRun>& runs, double budget, int passSpp = 1);
 
 }  // namespace candela

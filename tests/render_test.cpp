@@ -60,6 +60,28 @@ TEST(Renderer, CancelledPassLeavesTheFilmUntouchedAndStopsQuickly) {
   EXPECT_LT(std::chrono::duration<double>(returnedAt - cancelledAt).count(), std::max(0.05, eightSpp));
 }
 
+// Equal-time comparisons (bench, report) render their strategies side by side. What the clock
+// decides (how many passes fit) is left alone; what must hold on any machine is checked.
+TEST(Renderer, SideBySideRunsReachTheirBudgetsAndEachRendersAPass) {
+  const SceneDesc desc = test::loadScene("assets/scenes/cloud.json", {"camera.resolution=[32,18]"});
+  auto scene = Scene::build(desc);
+  ProgressiveRenderer a(scene, RenderOptions{2, 16}), b(scene, RenderOptions{2, 16});
+  const double budget = 0.05;
+  // The second run starts past the budget (an auto whose pilot took longer): one pass all the same.
+  std::vector<EqualTimeRun> runs{{&a, Film(), 0.0}, {&b, Film(), 2.0 * budget}};
+  renderSideBySide(runs, budget, 2);
+  EXPECT_GE(runs[0].seconds, budget);
+  EXPECT_GE(runs[0].film.spp(), 2);
+  EXPECT_EQ(runs[0].film.spp() % 2, 0);
+  EXPECT_EQ(runs[1].film.spp(), 2);
+  EXPECT_GT(runs[1].seconds, 2.0 * budget);
+  // The passes are the renderer's own: the same samples as rendered alone.
+  Film alone;
+  ProgressiveRenderer c(scene, RenderOptions{1, 16});
+  c.renderPass(alone, 2);
+  EXPECT_EQ(runs[1].film.sum(), alone.sum());
+}
+
 TEST(Film, RejectsAndCountsNonFiniteOrNegativeSamples) {
   Film pass(2, 1);
   EXPECT_TRUE(pass.addSample(0, 0, Rgb(1.0f)));
