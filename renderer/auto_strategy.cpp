@@ -13,13 +13,6 @@
 
 namespace candela {
 
-double WorkCounters::cost() const {
-  using C = WorkCost;
-  return C::kSample * static_cast<double>(samples) + C::kCollision * static_cast<double>(collisions) +
-         C::kSegment * static_cast<double>(segments) + C::kRay * static_cast<double>(rays) + C::kKnot * static_cast<double>(knots) +
-         C::kGuided * static_cast<double>(guided) + C::kGuide * static_cast<double>(guides);
-}
-
 std::string AutoDecision::summary() const {
   std::string s = "auto chose " + label();
   for (size_t i = 0; i < reasons.size(); ++i) s += (i == 0 ? ": " : "; ") + reasons[i];
