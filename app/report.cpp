@@ -143,6 +143,50 @@ SeededRender startRender(const SceneDesc& base, const std::string& preset, uint6
   return r;
 }
 
+// Every preset's render of the scene with one seed, compared side by side at equal time.
+struct Contest {
+  std::vector<SeededRender> starts;
+  std::vector<std::unique_ptr<ProgressiveRenderer>> renderers;
+};
+
+Contest startContest(const SceneDesc& base, const std::vector<std::string>& presets, uint64_t seed, int threads) {
+  Contest c;
+  for (const auto& preset : presets) {
+    c.starts.push_back(startRender(base, preset, seed));
+    c.renderers.push_back(std::make_unique<ProgressiveRenderer>(c.starts.back().scene, RenderOptions{threads, 16}));
+  }
+  return c;
+}
+
+// One preset's render to one budget: its image, the time and counted work charged to it (auto's
+// decision included) and its error.
+struct BudgetRender {
+  Film film;
+  double seconds = 0.0, work = 0.0;
+  ErrorMetrics error;
+};
+
+// Renders every preset of the contest to `budget`, side by side (renderSideBySide: the clock's swings
+// fall on all alike). Each starts afresh from auto's kept pilot samples (auto renders for what is
+// left of the budget after its decision); the renderers, with their camera-ray guide tables, carry
+// over from one budget to the next.
+std::vector<BudgetRender> renderContest(Contest& c, double budget, const Image& reference) {
+  std::vector<EqualTimeRun> sideBySide;
+  std::vector<double> workBefore;
+  for (size_t p = 0; p < c.starts.size(); ++p) {
+    sideBySide.push_back({c.renderers[p].get(), continueFromPilot(*c.starts[p].scene, 0), c.starts[p].pilotSeconds});
+    workBefore.push_back(c.renderers[p]->work().cost());
+  }
+  renderSideBySide(sideBySide, budget);
+  std::vector<BudgetRender> out;
+  for (size_t p = 0; p < c.starts.size(); ++p) {
+    EqualTimeRun& r = sideBySide[p];
+    const ErrorMetrics e = imageError(r.film.meanImage(), reference.rgb);
+    out.push_back({std::move(r.film), r.seconds, c.starts[p].pilotWork + c.renderers[p]->work().cost() - workBefore[p], e});
+  }
+  return out;
+}
+
 // The seeds the report renders every strategy with at the largest budget, side by side per seed. The
 // first is the charted run's. Auto's ratios against the presets are the medians over them: the clock
 // varies 15-30% between runs of one command and the relMSE is heavy-tailed, so one run's ratio can
@@ -189,60 +233,34 @@ int runReport(bool quick, const std::string& dir, int threads) {
     std::vector<Run> runs;
     // efficiencies[seed][preset], at the largest budget
     std::vector<std::vector<Efficiency>> efficiencies(kEfficiencySeeds.size());
-    // Every strategy renders side by side (renderSideBySide): the clock's swings fall on all alike.
-    // Each budget starts afresh from auto's kept pilot samples; the renderers (and their camera-ray
-    // guide tables) carry over from one budget to the next.
-    std::vector<SeededRender> starts;
-    std::vector<std::unique_ptr<ProgressiveRenderer>> renderers;
-    for (const auto& preset : presets) {
-      starts.push_back(startRender(base, preset, kEfficiencySeeds[0]));
-      renderers.push_back(std::make_unique<ProgressiveRenderer>(starts.back().scene, RenderOptions{threads, 16}));
+    // Seed 17: every budget, charted.
+    Contest charted = startContest(base, presets, kEfficiencySeeds[0], threads);
+    for (const SeededRender& start : charted.starts) {
       runs.push_back(Run{});
-      runs.back().strategy = starts.back().strategy, runs.back().note = starts.back().note;
+      runs.back().strategy = start.strategy, runs.back().note = start.note;
     }
-    std::vector<double> works(presets.size(), 0.0);
     for (double budget : budgets) {
-      std::vector<EqualTimeRun> sideBySide;
-      std::vector<double> workBefore;
+      std::vector<BudgetRender> renders = renderContest(charted, budget, reference);
       for (size_t p = 0; p < presets.size(); ++p) {
-        // auto renders for what is left of each budget after its decision.
-        sideBySide.push_back({renderers[p].get(), continueFromPilot(*starts[p].scene, 0), starts[p].pilotSeconds});
-        workBefore.push_back(renderers[p]->work().cost());
+        BudgetRender& r = renders[p];
+        points.push_back({runs[p].strategy, budget, r.seconds, r.film.spp(), r.error.mse, r.error.relmse, r.film.rejectedSamples()});
+        if (budget != budgets.back()) continue;
+        efficiencies[0].push_back(efficiencyOf(runs[p].strategy, r.error, r.seconds, r.work));
+        runs[p].film = std::move(r.film), runs[p].seconds = r.seconds, runs[p].error = r.error;
+        std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), presets[p].c_str(), runs[p].error.relmse, runs[p].seconds,
+                    runs[p].film.spp());
       }
-      renderSideBySide(sideBySide, budget);
-      for (size_t p = 0; p < presets.size(); ++p) {
-        const EqualTimeRun& r = sideBySide[p];
-        const ErrorMetrics e = imageError(r.film.meanImage(), reference.rgb);
-        points.push_back({runs[p].strategy, budget, r.seconds, r.film.spp(), e.mse, e.relmse, r.film.rejectedSamples()});
-        if (budget == budgets.back())
-          runs[p].film = r.film, runs[p].seconds = r.seconds, runs[p].error = e,
-          works[p] = starts[p].pilotWork + renderers[p]->work().cost() - workBefore[p];
-      }
-    }
-    for (size_t p = 0; p < presets.size(); ++p) {
-      const Run& run = runs[p];
-      efficiencies[0].push_back(efficiencyOf(run.strategy, run.error, run.seconds, works[p]));
-      std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), presets[p].c_str(), run.error.relmse, run.seconds, run.film.spp());
     }
     std::fflush(stdout);
-    // The further seeds, every strategy at the largest budget only, side by side (auto decides afresh
-    // per seed).
+    // The further seeds, every strategy at the largest budget only (auto decides afresh per seed).
     for (size_t s = 1; s < kEfficiencySeeds.size(); ++s) {
-      std::vector<SeededRender> seeded;
-      std::vector<std::unique_ptr<ProgressiveRenderer>> seededRenderers;
-      std::vector<EqualTimeRun> sideBySide;
-      for (const auto& preset : presets) {
-        seeded.push_back(startRender(base, preset, kEfficiencySeeds[s]));
-        seededRenderers.push_back(std::make_unique<ProgressiveRenderer>(seeded.back().scene, RenderOptions{threads, 16}));
-        sideBySide.push_back({seededRenderers.back().get(), continueFromPilot(*seeded.back().scene, 0), seeded.back().pilotSeconds});
-      }
-      renderSideBySide(sideBySide, budgets.back());
+      Contest contest = startContest(base, presets, kEfficiencySeeds[s], threads);
+      const std::vector<BudgetRender> renders = renderContest(contest, budgets.back(), reference);
       for (size_t p = 0; p < presets.size(); ++p) {
-        const EqualTimeRun& r = sideBySide[p];
-        const ErrorMetrics e = imageError(r.film.meanImage(), reference.rgb);
-        efficiencies[s].push_back(efficiencyOf(seeded[p].strategy, e, r.seconds, seeded[p].pilotWork + seededRenderers[p]->work().cost()));
+        const BudgetRender& r = renders[p];
+        efficiencies[s].push_back(efficiencyOf(contest.starts[p].strategy, r.error, r.seconds, r.work));
         std::printf("report: %s %s, seed %llu: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), presets[p].c_str(),
-                    static_cast<unsigned long long>(kEfficiencySeeds[s]), e.relmse, r.seconds, r.film.spp());
+                    static_cast<unsigned long long>(kEfficiencySeeds[s]), r.error.relmse, r.seconds, r.film.spp());
       }
       std::fflush(stdout);
     }
