@@ -68,7 +68,8 @@ struct EqualTimeRun {
 };
 
 // Renders every run until its `seconds` reach `budget`, side by side: one pass of `passSpp` at a
-// time, always of the run with the least time so far. Rendered one after another, each strategy
+// time, always of the run with the least time so far (the viewer's comparison panes schedule their
+// passes the same way, live, in ui/comparison_session.cpp). Rendered one after another, each strategy
 // met the machine as it was then; the clock's 15-30% swings between runs of one command (another
 // process, a frequency change) then fell on one strategy and not its rival, and a ratio between two
 // of them moved by up to 15% between runs. Side by side, a slow spell falls on all alike. A pass is
