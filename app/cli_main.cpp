@@ -400,7 +400,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
       if (reference.width != c.scene->camera().width() || reference.height != c.scene->camera().height())
         throw InputError(refPath + ": reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
                          ", expected the scene's " + std::to_string(c.scene->camera().width()) + "x" + std::to_string(c.scene->camera().height()));
-      if (const AutoDecision* d = c.scene->autoDecision()) c.pilot = d->pilotSeconds - d->probeSeconds, c.pilotWork = d->pilotWork;
+      if (const AutoDecision* d = c.scene->autoDecision()) c.pilot = d->chargedSeconds(), c.pilotWork = d->pilotWork;
       contenders.push_back(std::move(c));
     }
     for (double budget : times) {

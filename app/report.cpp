@@ -138,7 +138,7 @@ SeededRender startRender(const SceneDesc& base, const std::string& preset, uint6
   r.scene = Scene::build(desc), r.strategy = preset;
   if (const AutoDecision* d = r.scene->autoDecision()) {
     r.strategy = "auto (" + d->label() + ")", r.note = d->summary();
-    r.pilotSeconds = d->pilotSeconds - d->probeSeconds, r.pilotWork = d->pilotWork;
+    r.pilotSeconds = d->chargedSeconds(), r.pilotWork = d->pilotWork;
   }
   return r;
 }

@@ -88,6 +88,8 @@ struct AutoDecision {
   // its scene, so bench and report charge auto only pilotSeconds - probeSeconds, as they charge no
   // preset its build.
   double probeSeconds = 0.0;
+  // The time an equal-time comparison (bench, report, the viewer's panes) charges auto for deciding.
+  double chargedSeconds() const { return std::max(0.0, pilotSeconds - probeSeconds); }
   int pilotWidth = 0, pilotHeight = 0, pilotSpp = 0;  // pilotSpp: per candidate image
   // Every kept pilot image's samples summed (all but a fresh round's second look at its rival and,
   // under a sun, the plain candidate's image: docs/method.md 4b), when the pilot rendered the image

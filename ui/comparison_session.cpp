@@ -104,7 +104,7 @@ void ComparisonSession::workerLoop() {
           // probes' learning, which no fixed preset is charged either), and its kept pilot samples
           // start the pane's image.
           if (const AutoDecision* d = panes.back().scene->autoDecision()) {
-            s.seconds = std::max(0.0, d->pilotSeconds - d->probeSeconds);
+            s.seconds = d->chargedSeconds();
             panes.back().film = continueFromPilot(*panes.back().scene, 0);
           }
           state->panes.push_back(s);
