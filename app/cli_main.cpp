@@ -328,7 +328,8 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
     } catch (...) {
       throw InputError("--times: expected comma-separated seconds, got \"" + timesText + "\"");
     }
-    if (!(times.back() > 0.0)) throw InputError("--times: expected positive seconds, got " + t);
+    // At most render.time_s's bound: a budget of 1e30 s rendered until killed.
+    if (!(times.back() > 0.0 && times.back() <= 1e7)) throw InputError("--times: expected positive seconds, at most 1e7, got " + t);
   }
   if (strategies.empty()) throw InputError("--strategies: expected at least one preset");
   if (times.empty()) throw InputError("--times: expected at least one time budget");
