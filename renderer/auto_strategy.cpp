@@ -118,7 +118,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     reasons.push_back(why);
     return out;
   }
-  std::snprintf(why, sizeof(why), "%.0f%% of camera rays are thin enough for scattering sampling: pilot", 100.0 * share);
+  std::snprintf(why, sizeof(why), "%.0f%% of camera rays are thin enough for scattering sampling", 100.0 * share);
   reasons.push_back(why);
   // The guided candidates, like the plain one, weight absorption at every collision (as the full
   // and equiangular presets do in any scene). With the analog walk auto's full trailed the full
@@ -139,8 +139,8 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     reasons.push_back(std::string(sunLit ? "a sun shines into the media" : "no volume emits") +
                       ": guided candidates guide the thin rays leaving a medium vertex too");
   out.push_back({"full", full});
-  // Where volumes emit, full (the guided vertex on one camera segment in ten) stands and the plain
-  // candidate must beat it, unless the flames are the only concentrated light of a medium that
+  // Where volumes emit, full (the guided vertex on one camera segment in ten) stands and runs
+  // without a pilot, unless the flames are the only concentrated light of a medium that
   // emits nothing (below). Its gain is in rare tracked vertices (dim smoke scattering a hot core's
   // light, haze beside a sun's shafts) whose weight the guided density bounds: an 8-spp pilot
   // seldom draws them (fire: emission 0.20 against full 0.18 per sample at 8 spp, 1.19 against 0.62
@@ -156,19 +156,35 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   if (emissive && plainScatterer && !sunLit) {
     reasons.push_back("the volumes light a medium that emits nothing, and no sun shines: emission stands");
   } else if (emissive) {
-    out.front().standing = false;
-    out.back().standing = true;
+    // Where full stands, the pilot only ever risked overturning it: it chose full on all 18 seeds of
+    // fire, shed-fire and thin-bright-fire and on every emissive stability case, and without its q
+    // refinements (below) its 2-spp images put emission ahead of full on shed-fire (seed 1: x1.40,
+    // relMSE x1.91), where full is x2.9 ahead by relative variance per sample. So full runs at once
+    // and the render keeps the pilot's time (0.2-1.0 s of the bench's 8 s; docs/performance.md,
+    // "No pilot where full stands").
+    out.erase(out.begin());
+    out.front().standing = true;
     reasons.push_back(std::string(sunLit ? "volumes emit under a sun" : "only the emitting volumes scatter") +
-                      ": full stands unless the pilot puts another candidate " + marginPercent() + " ahead");
+                      ": full stands, no pilot (the pilot cannot see its gain, in samples too rare for a few per pixel)");
+    return out;
   }
   // The guided vertex on one camera segment in two: where the probes' light is most of the image
   // (god rays' shafts) it is x1.3-1.8 ahead of full by absolute variance per sample, behind where
-  // little light scatters. Mostly a level for the region map. Deeper guiding (guided_segments 8) is
-  // no candidate: per sample at 320x180 it cost 2.9x full's work on god-rays-dark for 1.3x less
-  // variance, 2.4x on shed-fire for 1.1x, and it never came within 0.3 of the best in a pilot.
-  StrategySettings often = full;
-  often.guiding.guided_probability = kAutoOftenGuidedProbability;
-  out.push_back({kAutoOftenGuidedName, often});
+  // little light scatters. Mostly a level for the region map. Not a candidate where full measures
+  // each pixel block's q from its own samples (guiding.measured_pixel_probability, as the preset
+  // does): from 16 samples per pixel on, full takes 0 to 0.5 per block itself, so this candidate
+  // and the region map would differ from full in the first 16 samples only; the pilot rendered
+  // them for up to 0.9 s of torch-in-fog's 8 s (docs/performance.md, "No pilot where full
+  // stands"). Deeper guiding (guided_segments 8) is no candidate: per sample at 320x180 it cost
+  // 2.9x full's work on god-rays-dark for 1.3x less variance, 2.4x on shed-fire for 1.1x, and it
+  // never came within 0.3 of the best in a pilot.
+  if (!measuresPixelProbability(full.guiding)) {
+    StrategySettings often = full;
+    often.guiding.guided_probability = kAutoOftenGuidedProbability;
+    out.push_back({kAutoOftenGuidedName, often});
+  } else {
+    reasons.push_back("full measures each pixel block's q from its own samples: no q refinements piloted");
+  }
   // Equi-angular sampling aims at a point: a point, spot or sphere light, or an emissive volume's
   // emission centroid (PathTracer's targets). Without one its slot holds a uniform density over the
   // ray's medium interval, which on the god-rays scenes measured x0.55-0.70 of conventional by
@@ -387,7 +403,9 @@ AutoDecision decide(Scene& scene) {
     qLevels.push_back(fullIndex);
     scorePilot();
     const bool fullAhead = d.pilot[fullIndex].efficiency > d.pilot[0].efficiency;
-    const bool fullAheadSomewhere = fullAhead || regionMap(qLevels, true).guidedShare() > 0.0;
+    // Where any region would take a guided q: asked only for the q refinements (a full whose q is predicted).
+    const bool oftenOffered = std::any_of(refinements.begin(), refinements.end(), [](const AutoCandidate& c) { return c.name == kAutoOftenGuidedName; });
+    const bool fullAheadSomewhere = fullAhead || (oftenOffered && regionMap(qLevels, true).guidedShare() > 0.0);
     std::vector<std::string> skipped;
     for (const AutoCandidate& c : refinements) {
       const bool often = c.name == kAutoOftenGuidedName;
@@ -400,7 +418,7 @@ AutoDecision decide(Scene& scene) {
       d.pilot.push_back(measure(c, nullptr, images.emplace_back()));
     }
     if (!fullAhead) {
-      std::string line = std::string(fullAheadSomewhere ? "full behind " : "full behind in every region of ") + candidates[0].name +
+      std::string line = std::string(fullAheadSomewhere || !oftenOffered ? "full behind " : "full behind in every region of ") + candidates[0].name +
                          " in the first round";
       std::string names;
       for (const std::string& n : skipped) names += (names.empty() ? "" : " and ") + n;
@@ -413,7 +431,7 @@ AutoDecision decide(Scene& scene) {
   // rendered and measured like any candidate, on samples of its own: measuring it on the images
   // that chose it would credit it with their luck (the best of several noisy estimates per region).
   GuidedRegions regions;
-  if (fullIndex < candidates.size()) {
+  if (fullIndex < candidates.size() && !measuresPixelProbability(candidates[fullIndex].strategy.guiding)) {
     regions = regionMap(qLevels, !guidedContinuationsApply(scene, candidates[fullIndex].strategy.guiding));
     std::vector<float> levels = regions.probability;
     std::sort(levels.begin(), levels.end());
@@ -424,15 +442,12 @@ AutoDecision decide(Scene& scene) {
     }
   }
   scorePilot();
-  // The best-scoring candidate, but only when it beats the standing one (the plain candidate, or
-  // full where volumes emit into thin media) by kAutoMargin: the pilot's variances and the work
-  // model are estimates, and a near tie is not worth a change. The full margin is asked of the
-  // fresh round below, on twice the samples. Of this first 8-spp round the plain candidate's
-  // challengers need only half of it (the square root): asked the whole, it turned full down on one
-  // seed in eight of god-rays-dark (x1.12 in the pilot), where fresh seeds measure full x1.3-1.8
-  // ahead and the bench x1.6 by MSE. A challenger of a standing full needs the whole: the pilot
-  // underrates full there (its gain is in samples too rare for 8 spp), and asked less, fresh
-  // rounds ran on most seeds of the four emission scenes and handed fire to emission on one.
+  // The best-scoring candidate, but only when it beats the standing one (the plain candidate: where
+  // full stands there is no pilot) by kAutoMargin: the pilot's variances and the work model are
+  // estimates, and a near tie is not worth a change. The full margin is asked of the fresh round
+  // below, on twice the samples. Of this first 8-spp round the challengers need only half of it
+  // (the square root): asked the whole, it turned full down on one seed in eight of god-rays-dark
+  // (x1.12 in the pilot), where fresh seeds measure full x1.3-1.8 ahead and the bench x1.6 by MSE.
   size_t standing = 0;
   for (size_t i = 0; i < candidates.size(); ++i)
     if (candidates[i].standing) standing = i;
@@ -441,8 +456,7 @@ AutoDecision decide(Scene& scene) {
   for (size_t i = 0; i < d.pilot.size(); ++i)
     if (d.pilot[i].efficiency > best) best = d.pilot[i].efficiency, chosen = i;
   const std::string margin = marginPercent();
-  const bool plainStands = standing == 0;  // autoCandidates puts the plain candidate first
-  const double pilotMargin = plainStands ? std::sqrt(kAutoMargin) : kAutoMargin;
+  const double pilotMargin = std::sqrt(kAutoMargin);
   if (chosen != standing && best < pilotMargin * d.pilot[standing].efficiency) {
     chosen = standing;
     d.reasons.push_back("no candidate beat " + candidates[standing].name + " by " + marginPercent(pilotMargin) + " in the pilot");

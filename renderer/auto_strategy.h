@@ -4,18 +4,19 @@
 //    never builds emission structures), with the emission weight relative to each medium's emission
 //    scale; scattering (distance) sampling only when some volume scatters a light and enough camera
 //    rays are thin enough for it to help (a thick cloud never learns probes).
-// 2. A pilot: the plain candidate and the guided camera vertex ("full") render a few samples per
-//    pixel of a small image; the refinements of guiding follow only where full is ahead: the
-//    guided vertex on one camera segment in two when full led in the image or in some region,
-//    equiangular when it led in the image. A region map (q = 0, full's 0.1 or 0.5 per region) is
-//    one more candidate where the regions' best differ. Each one's variance per sample (the film's
+// 2. Where volumes emit and either only they scatter or a sun shines too, full stands and runs
+//    without a pilot: its gain there is in samples too rare for a pilot to see. Elsewhere a pilot:
+//    the plain candidate and the guided camera vertex ("full") render a few samples per pixel of a
+//    small image; equiangular follows only where full led in the image. Full measures each pixel
+//    block's q itself (guiding.measured_pixel_probability); for a full whose q is only predicted,
+//    the guided vertex on one camera segment in two and a region map (q = 0, full's 0.1 or 0.5 per
+//    region) are candidates too. Each one's variance per sample (the film's
 //    sums of squares), relative to a mean image all candidates share and absolute, times its work
 //    (work.h: counted, never timed)
 //    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
 //    highest is kept (the report holds auto to the best preset by relMSE and by MSE) if it beats
-//    the standing candidate by kAutoMargin: the plain one, or full where volumes emit into thin
-//    scattering media (its gain there is in samples too rare for the pilot), on fresh samples after
-//    leading the pilot (by sqrt(kAutoMargin) against the plain one, by kAutoMargin against full).
+//    the plain candidate by kAutoMargin on fresh samples after leading the pilot by
+//    sqrt(kAutoMargin).
 //    The same seed gives the same decision on any machine and thread count. An image small enough
 //    is piloted as it is, on sample indices of its own per candidate, and the pilot's samples stay
 //    in the image (AutoDecision::pilotFilm), but for the images that only measure (a fresh round's
