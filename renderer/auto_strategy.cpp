@@ -29,13 +29,6 @@ std::string AutoDecision::summary() const {
   return s;
 }
 
-double GuidedRegions::guidedShare() const {
-  if (probability.empty()) return 0.0;
-  size_t guided = 0;
-  for (float q : probability) guided += q > 0.0f;
-  return static_cast<double>(guided) / static_cast<double>(probability.size());
-}
-
 StrategySettings autoBaseStrategy() {
   StrategySettings s = strategyPreset("conventional");
   s.preset = "auto";
@@ -168,23 +161,15 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
                       ": full stands, no pilot (the pilot cannot see its gain, in samples too rare for a few per pixel)");
     return out;
   }
-  // The guided vertex on one camera segment in two: where the probes' light is most of the image
-  // (god rays' shafts) it is x1.3-1.8 ahead of full by absolute variance per sample, behind where
-  // little light scatters. Mostly a level for the region map. Not a candidate where full measures
-  // each pixel block's q from its own samples (guiding.measured_pixel_probability, as the preset
-  // does): from 16 samples per pixel on, full takes 0 to 0.5 per block itself, so this candidate
-  // and the region map would differ from full in the first 16 samples only; the pilot rendered
-  // them for up to 0.9 s of torch-in-fog's 8 s (docs/performance.md, "No pilot where full
-  // stands"). Deeper guiding (guided_segments 8) is no candidate: per sample at 320x180 it cost
-  // 2.9x full's work on god-rays-dark for 1.3x less variance, 2.4x on shed-fire for 1.1x, and it
-  // never came within 0.3 of the best in a pilot.
-  if (!measuresPixelProbability(full.guiding)) {
-    StrategySettings often = full;
-    often.guiding.guided_probability = kAutoOftenGuidedProbability;
-    out.push_back({kAutoOftenGuidedName, often});
-  } else {
-    reasons.push_back("full measures each pixel block's q from its own samples: no q refinements piloted");
-  }
+  // Full measures each pixel block's q from its own samples (guiding.measured_pixel_probability, as
+  // the preset does): from 16 samples per pixel on it takes 0 to 0.5 per block itself. The pilot's
+  // refinements of q (the guided vertex on one camera segment in two, a map of q by region) would
+  // differ from it in the first 16 samples only, and cost up to 1.6 s of torch-in-fog's 8 s, so they
+  // are no candidates (docs/performance.md, "No pilot where full stands"). Deeper guiding
+  // (guided_segments 8) is none either: per sample at 320x180 it cost 2.9x full's work on
+  // god-rays-dark for 1.3x less variance, 2.4x on shed-fire for 1.1x, and it never came within 0.3
+  // of the best in a pilot.
+  reasons.push_back("full measures each pixel block's q from its own samples: no q refinements piloted");
   // Equi-angular sampling aims at a point: a point, spot or sphere light, or an emissive volume's
   // emission centroid (PathTracer's targets). Without one its slot holds a uniform density over the
   // ray's medium interval, which on the god-rays scenes measured x0.55-0.70 of conventional by
@@ -258,8 +243,6 @@ AutoDecision decide(Scene& scene) {
     scene.setCamera(pilotCamera);
   }
   d.pilotWidth = pilotCamera.resolution.first, d.pilotHeight = pilotCamera.resolution.second;
-  // About 16 regions across, as 8-pixel regions of the 128 x 72 copy are.
-  const int regionSize = std::max(8, pilotCamera.resolution.first / 16);
   Film kept = keep ? Film(full.resolution.first, full.resolution.second) : Film();  // every pilot image's samples
   int nextSample = 0;  // the first sample index of the next pilot image
   // Every pilot image's per-pixel moments. The mean of all their means is the one normaliser of the
@@ -274,19 +257,17 @@ AutoDecision decide(Scene& scene) {
     ++sharedCount;
     for (size_t i = 0; i < pm.mean.size(); ++i) sharedMean[i] += (pm.mean[i] - sharedMean[i]) / static_cast<float>(sharedCount);
   };
-  // One renderer for every pilot image: they share its camera-ray guide tables, which a new q or
-  // region map does not rebuild (camera_guides.h).
+  // One renderer for every pilot image: they share its camera-ray guide tables, which a new q does
+  // not rebuild (camera_guides.h).
   ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
-  // other pilot image) and measures it; `regions` (for "full, by region") are applied after its
-  // strategy. The per-pixel moments go to `moments`. An image that only measures (!keepSamples: the
+  // other pilot image) and measures it. The per-pixel moments go to `moments`. An image that only measures (!keepSamples: the
   // fresh round's second look at its rival, the plain candidate's under a sun) renders from indices
   // the image never uses, so the kept ones stay 0 to kept.spp() - 1, where the render continues.
   int nextUnkeptSample = 1 << 28;
-  auto measure = [&](const AutoCandidate& c, const GuidedRegions* map, PixelMoments& moments, bool keepSamples = true) {
+  auto measure = [&](const AutoCandidate& c, PixelMoments& moments, bool keepSamples = true) {
     const bool hadProbes = scene.probes() != nullptr;
     scene.setStrategy(c.strategy);
-    if (map) scene.setGuidedRegions(*map);
     if (!hadProbes && scene.probes()) d.probeSeconds += scene.probes()->learnSeconds();
     int& first = keepSamples ? nextSample : nextUnkeptSample;
     renderer.setFirstSample(first);
@@ -319,62 +300,9 @@ AutoDecision decide(Scene& scene) {
     for (const PixelMoments& pm : images) ptrs.push_back(&pm);
     score(d.pilot, ptrs);
   };
-  // The region map: per pilot region, the one-sample probability q of the guided camera vertex
-  // among the plain candidate's (0) and those of the measured guided candidates in `guided`, which
-  // differ from full only in q. Each region takes the q whose variance x work is least, the relative
-  // and the absolute variance (both against the shared mean, as the score's) each over the least
-  // whole-image total of the levels and summed: the score is the worse of the two metrics, each
-  // against the best candidate's, and this sum is its linearisation. A guided q must beat the plain
-  // candidate by kAutoMargin. Work is each candidate's per sample over the whole image.
-  // Normalised by the plain candidate's totals instead, the absolute term counted for little outside
-  // the few regions that held the plain candidate's brightest samples, and the maps kept q = 0 in
-  // most of the shafts: over seeds 1-6 of god-rays-backlit, god-rays-dark and shed-fire the maps
-  // scored 0.72, 0.59 and 0.88 of the best candidate in the pilot (means), now 0.77, 0.65 and 0.89.
-  // Tried and not kept: choosing each region to maximise the map's predicted score fitted the
-  // pilot's noise (at 2 spp a plain region that drew none of its rare bright samples looks calm) and
-  // its maps measured behind full on fresh samples; deciding on each region's figures summed with
-  // its 3 x 3 neighbours' was better on some seeds of god-rays-backlit and worse on god-rays-dark
-  // and shed-fire.
-  // `tracking`: whether tracking alone (q = 0) is a level. Where full guides continuations it is
-  // not (the map's regions then choose between full's q levels): its regional figures come from the
-  // plain candidate's image, whose rare bright samples (a haze vertex's continuation meeting a
-  // shaft) 2 spp seldom draw, and maps with q = 0 in most regions measured x0.73-0.91 of full by
-  // relMSE in the bench on god-rays-dark and god-rays-backlit, though the pilot put them x1.26-1.32
-  // ahead of it by relMSE on every seed.
-  auto regionMap = [&](const std::vector<size_t>& guided, bool tracking) {
-    const int width = pilotCamera.resolution.first, height = pilotCamera.resolution.second;
-    const RegionalVariance plain = regionalVarianceAgainst(images[0].variance, sharedMean, width, height, regionSize);
-    std::vector<RegionalVariance> levels;
-    for (size_t k : guided) levels.push_back(regionalVarianceAgainst(images[k].variance, sharedMean, width, height, regionSize));
-    auto total = [](const std::vector<double>& v) {
-      double sum = 1e-30;
-      for (double x : v) sum += x;
-      return sum;
-    };
-    double relativeTotal = total(plain.relative), absoluteTotal = total(plain.absolute);
-    for (const RegionalVariance& l : levels)
-      relativeTotal = std::min(relativeTotal, total(l.relative)), absoluteTotal = std::min(absoluteTotal, total(l.absolute));
-    GuidedRegions map;
-    map.regionsX = plain.regionsX, map.regionsY = plain.regionsY;
-    for (size_t r = 0; r < plain.relative.size(); ++r) {
-      auto cost = [&](const RegionalVariance& v, double work) {
-        return (v.relative[r] / relativeTotal + v.absolute[r] / absoluteTotal) * work;
-      };
-      double least = tracking ? cost(plain, d.pilot[0].workPerSample) / kAutoMargin : std::numeric_limits<double>::infinity();
-      float q = 0.0f;
-      for (size_t l = 0; l < guided.size(); ++l) {
-        const double c = cost(levels[l], d.pilot[guided[l]].workPerSample);
-        if (c < least) least = c, q = candidates[guided[l]].strategy.guiding.guided_probability;
-      }
-      map.probability.push_back(q);
-    }
-    return map;
-  };
-  // First the plain candidate and the guided camera vertex ("full"). The other guided candidates
-  // refine it, and are rendered only where it pays: the guided vertex in one segment in two when full
-  // was ahead of the plain candidate in the whole image or in some region, equiangular when it was
-  // ahead in the whole image. Over the report scenes equiangular never came within 10% of the best
-  // where full was behind, and skipping the refinements halves the pilot there.
+  // First the plain candidate and the guided camera vertex ("full"); equiangular follows only where
+  // full was ahead of the plain candidate in the whole image. Over the report scenes it never came
+  // within 10% of the best where full was behind, and skipping it halves the pilot there.
   size_t fullIndex = candidates.size();
   for (size_t i = 0; i < candidates.size(); ++i)
     if (candidates[i].name == "full") fullIndex = i;
@@ -393,52 +321,24 @@ AutoDecision decide(Scene& scene) {
       refinements.push_back(candidates[i]);
       continue;
     }
-    d.pilot.push_back(measure(candidates[i], nullptr, images.emplace_back(), i != 0 || keepPlain));
+    d.pilot.push_back(measure(candidates[i], images.emplace_back(), i != 0 || keepPlain));
   }
   candidates.erase(std::remove_if(candidates.begin() + 1, candidates.end(), [](const AutoCandidate& c) { return c.name != "full"; }),
                    candidates.end());
   fullIndex = candidates.size() > 1 ? 1 : candidates.size();
-  std::vector<size_t> qLevels;  // the measured guided candidates that differ from full only in q
   if (fullIndex < candidates.size()) {
-    qLevels.push_back(fullIndex);
     scorePilot();
-    const bool fullAhead = d.pilot[fullIndex].efficiency > d.pilot[0].efficiency;
-    // Where any region would take a guided q: asked only for the q refinements (a full whose q is predicted).
-    const bool oftenOffered = std::any_of(refinements.begin(), refinements.end(), [](const AutoCandidate& c) { return c.name == kAutoOftenGuidedName; });
-    const bool fullAheadSomewhere = fullAhead || (oftenOffered && regionMap(qLevels, true).guidedShare() > 0.0);
-    std::vector<std::string> skipped;
-    for (const AutoCandidate& c : refinements) {
-      const bool often = c.name == kAutoOftenGuidedName;
-      if (!(often ? fullAheadSomewhere : fullAhead)) {
-        skipped.push_back(c.name);
-        continue;
+    if (d.pilot[fullIndex].efficiency > d.pilot[0].efficiency) {
+      for (const AutoCandidate& c : refinements) {
+        candidates.push_back(c);
+        d.pilot.push_back(measure(c, images.emplace_back()));
       }
-      if (often) qLevels.push_back(candidates.size());
-      candidates.push_back(c);
-      d.pilot.push_back(measure(c, nullptr, images.emplace_back()));
-    }
-    if (!fullAhead) {
-      std::string line = std::string(fullAheadSomewhere || !oftenOffered ? "full behind " : "full behind in every region of ") + candidates[0].name +
-                         " in the first round";
+    } else {
+      std::string line = "full behind " + candidates[0].name + " in the first round";
       std::string names;
-      for (const std::string& n : skipped) names += (names.empty() ? "" : " and ") + n;
+      for (const AutoCandidate& c : refinements) names += (names.empty() ? "" : " and ") + c.name;
       if (!names.empty()) line += ": " + names + " not tried";
       d.reasons.push_back(line);
-    }
-  }
-  // "full, by region": per region the q of the map above (regions differ: a fire beside god rays
-  // wants tracking alone, the shafts a guided vertex, the brightest shafts often). The map is then
-  // rendered and measured like any candidate, on samples of its own: measuring it on the images
-  // that chose it would credit it with their luck (the best of several noisy estimates per region).
-  GuidedRegions regions;
-  if (fullIndex < candidates.size() && !measuresPixelProbability(candidates[fullIndex].strategy.guiding)) {
-    regions = regionMap(qLevels, !guidedContinuationsApply(scene, candidates[fullIndex].strategy.guiding));
-    std::vector<float> levels = regions.probability;
-    std::sort(levels.begin(), levels.end());
-    // Only a genuine mix is a new candidate: a single q everywhere is a candidate already measured.
-    if (std::unique(levels.begin(), levels.end()) - levels.begin() > 1) {
-      candidates.push_back({"full, by region", candidates[fullIndex].strategy});
-      d.pilot.push_back(measure(candidates.back(), &regions, images.emplace_back()));
     }
   }
   scorePilot();
@@ -467,15 +367,14 @@ AutoDecision decide(Scene& scene) {
     // of two fresh sample ranges, its rival once more, and the winner is kept only if the fresh
     // estimates still score it kAutoMargin ahead of the rival's (both rounds pooled).
     auto confirm = [&](size_t challenger, size_t rival) {
-      const GuidedRegions* map = candidates[challenger].name == "full, by region" ? &regions : nullptr;
       PixelMoments freshImage, freshImage2, rivalImage;
-      const AutoMeasurement fresh = measure(candidates[challenger], map, freshImage);
-      const AutoMeasurement fresh2 = measure(candidates[challenger], map, freshImage2);
+      const AutoMeasurement fresh = measure(candidates[challenger], freshImage);
+      const AutoMeasurement fresh2 = measure(candidates[challenger], freshImage2);
       // The rival's second image only measures: kept, it would add the samples of the candidate
       // about to lose to the image (on god-rays-dark the plain candidate's, at 5 times full's
       // variance per sample, 4 of the pilot's 14 samples per pixel instead of 2). Not keeping it is a
       // rule fixed before any sample is drawn, so the kept samples stay unbiased.
-      const AutoMeasurement rivalAgain = measure(candidates[rival], nullptr, rivalImage, false);
+      const AutoMeasurement rivalAgain = measure(candidates[rival], rivalImage, false);
       // Pooled per candidate: the mean of its images' variances (against the shared mean) and work.
       std::vector<AutoMeasurement> pair{fresh, fresh2, d.pilot[rival], rivalAgain};
       score(pair, {&freshImage, &freshImage2, &images[rival], &rivalImage});
@@ -497,31 +396,12 @@ AutoDecision decide(Scene& scene) {
       d.reasons.push_back("not " + margin + " ahead: " + candidates[rival].name);
       return false;
     };
-    // A refinement of full (q by region, or one camera segment in two) that led a full which itself
-    // led the standing candidate is held to full first: its lead over full is the kind the pilot
-    // misjudges. Where full guides continuations, the region map's q = 0 regions come from the plain
-    // candidate's 2-spp image, which had seldom drawn its rare bright samples, and the bench measured
-    // such maps x0.73-0.91 of full by relMSE on god-rays-dark and god-rays-backlit (seeds 1-3).
-    const bool refinesFull = fullIndex < candidates.size() && chosen != fullIndex && candidates[chosen].name.rfind("full, ", 0) == 0;
-    if (refinesFull && fullIndex != standing && d.pilot[fullIndex].efficiency >= pilotMargin * d.pilot[standing].efficiency &&
-        !confirm(chosen, fullIndex))
-      chosen = fullIndex;
     if (!confirm(chosen, standing)) chosen = standing;
   }
   d.chosen = candidates[chosen].name;
   if (keep) d.pilotFilm = std::make_shared<const Film>(std::move(kept)), d.pilotView = viewKey(scene);
   else scene.setCamera(full);
   scene.setStrategy(candidates[chosen].strategy);
-  if (d.chosen == "full, by region") {
-    size_t often = 0;
-    for (float q : regions.probability) often += q == kAutoOftenGuidedProbability;
-    char why[160];
-    std::snprintf(why, sizeof(why), "guided vertices in %.0f%% of the image's regions (one camera segment in two in %.0f%%)",
-                  100.0 * regions.guidedShare(), 100.0 * static_cast<double>(often) / static_cast<double>(regions.probability.size()));
-    d.reasons.push_back(why);
-    d.regions = regions;
-    scene.setGuidedRegions(std::move(regions));
-  }
   return d;
 }
 

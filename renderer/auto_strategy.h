@@ -8,9 +8,8 @@
 //    without a pilot: its gain there is in samples too rare for a pilot to see. Elsewhere a pilot:
 //    the plain candidate and the guided camera vertex ("full") render a few samples per pixel of a
 //    small image; equiangular follows only where full led in the image. Full measures each pixel
-//    block's q itself (guiding.measured_pixel_probability); for a full whose q is only predicted,
-//    the guided vertex on one camera segment in two and a region map (q = 0, full's 0.1 or 0.5 per
-//    region) are candidates too. Each one's variance per sample (the film's
+//    block's q itself (guiding.measured_pixel_probability), so no refinement of its q is a
+//    candidate. Each one's variance per sample (the film's
 //    sums of squares), relative to a mean image all candidates share and absolute, times its work
 //    (work.h: counted, never timed)
 //    gives two efficiencies; the candidate whose worse one, relative to the best candidate's, is
@@ -38,10 +37,11 @@ class Film;
 class Scene;
 
 struct AutoCandidate {
-  std::string name;  // "emission", "full", "full, guided_probability 0.5", ...
+  std::string name;  // "emission", "conventional, gathering", "full", "equiangular"
   StrategySettings strategy;
   // The candidate the others must beat by kAutoMargin in the pilot (exactly one per list): the plain
-  // one, or `full` where volumes emit into thin scattering media (autoCandidates says why).
+  // one, or `full` where volumes emit and either only they scatter or a sun shines too, where it is
+  // the only candidate (autoCandidates says why).
   bool standing = false;
 };
 
@@ -59,9 +59,10 @@ struct AutoMeasurement {
   double efficiency = 0.0;
 };
 
-// Scattering sampling by image region (auto's per-region choice): the one-sample probability q of
-// the guided vertex for the camera rays of each cell of a regionsX x regionsY grid over the image;
-// 0 where tracking alone was more efficient in the pilot. Empty: the settings' q everywhere.
+// Scattering sampling by image region: the one-sample probability q of the guided vertex for the
+// camera rays of each cell of a regionsX x regionsY grid over the image (0: tracking alone). Empty:
+// the settings' q everywhere. Auto's pilot drew such a map for a full whose q is only predicted;
+// auto's full measures each pixel block's q itself, so only scene->setGuidedRegions sets one now.
 struct GuidedRegions {
   int regionsX = 0, regionsY = 0;
   std::vector<float> probability;  // row-major, regionsX x regionsY
@@ -71,7 +72,6 @@ struct GuidedRegions {
     const int ry = std::min(regionsY - 1, y * regionsY / std::max(1, height));
     return probability[static_cast<size_t>(ry) * static_cast<size_t>(regionsX) + static_cast<size_t>(rx)];
   }
-  double guidedShare() const;  // the share of regions with q > 0
 };
 
 struct AutoDecision {
@@ -98,8 +98,6 @@ struct AutoDecision {
   // seed, to be continued from (continueFromPilot). Null when the pilot rendered a reduced copy.
   std::shared_ptr<const Film> pilotFilm;
   std::string pilotView;  // the camera and render settings pilotFilm was rendered with (JSON)
-  // When the choice is "full, by region": where the camera rays take guided vertices.
-  GuidedRegions regions;
   // One line: "auto chose emission: volumes emit; ...; pilot: emission 1.00, full 0.62".
   std::string summary() const;
 };
@@ -112,10 +110,6 @@ inline constexpr float kAutoRelativeEmissionWeight = 10.0f;
 // pixels is piloted as it is, at 2-8 spp, and keeps the pilot's samples; a larger one is piloted on
 // a copy of about 128 x 72 pixels at 8 spp.
 inline constexpr double kPilotSamples = 128.0 * 72.0 * 8.0;
-// The guided candidate that takes the guided camera vertex on one segment in two (full: one in ten),
-// and a level of the region map.
-inline constexpr float kAutoOftenGuidedProbability = 0.5f;
-inline constexpr const char* kAutoOftenGuidedName = "full, guided_probability 0.5";
 // How much more efficient than the plain candidate an elaborate one must be in the pilot.
 inline constexpr double kAutoMargin = 1.2;
 
