@@ -59,23 +59,8 @@ struct AutoMeasurement {
   double efficiency = 0.0;
 };
 
-// Scattering sampling by image region: the one-sample probability q of the guided vertex for the
-// camera rays of each cell of a regionsX x regionsY grid over the image (0: tracking alone). Empty:
-// the settings' q everywhere. Auto's pilot drew such a map for a full whose q is only predicted;
-// auto's full measures each pixel block's q itself, so only scene->setGuidedRegions sets one now.
-struct GuidedRegions {
-  int regionsX = 0, regionsY = 0;
-  std::vector<float> probability;  // row-major, regionsX x regionsY
-  bool empty() const { return probability.empty(); }
-  float at(int x, int y, int width, int height) const {
-    const int rx = std::min(regionsX - 1, x * regionsX / std::max(1, width));
-    const int ry = std::min(regionsY - 1, y * regionsY / std::max(1, height));
-    return probability[static_cast<size_t>(ry) * static_cast<size_t>(regionsX) + static_cast<size_t>(rx)];
-  }
-};
-
 struct AutoDecision {
-  std::string chosen;  // the candidate's name ("emission", "full", "full, by region", ...)
+  std::string chosen;  // the candidate's name ("emission", "full", "conventional, gathering", ...)
   // What the status bar, the report and the metadata show. (The candidates guide continuations as
   // the preset of the same name does, so the name alone says which settings ran.)
   std::string label() const { return chosen; }

@@ -13,17 +13,10 @@
 
 namespace candela {
 
-float guidedProbabilityAt(const Scene& scene, int x, int y, int width, int height) {
-  const GuidedRegions& regions = scene.guidedRegions();
-  return regions.empty() ? scene.strategy().guiding.guided_probability : regions.at(x, y, width, height);
-}
-
 float CameraGuides::probabilityAt(const Scene& scene, int x, int y) const {
-  const float base = guidedProbabilityAt(scene, x, y, width_, height_);
+  const float base = scene.strategy().guiding.guided_probability;
   const float most = scene.strategy().guiding.bright_pixel_probability;
-  // q = 0 (auto's region map: tracking alone) stays 0: raising it would guide where the pilot
-  // measured tracking ahead.
-  if (!(base > 0.0f) || !(most > base)) return base;
+  if (!(most > base)) return base;
   return std::clamp(base * brightness(x, y), base, most);
 }
 
@@ -40,15 +33,13 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   if (g.guide != DistanceGuide::Probes) return false;
   char identity[64];
   std::snprintf(identity, sizeof identity, "%p/%p/", static_cast<const void*>(&scene), static_cast<const void*>(tracer.probes()));
-  // The tables depend on the camera, the probes and the guiding settings but q; each pixel's q
-  // (the settings' or auto's region map) is refreshed without rebuilding them, so auto's pilot
-  // renders its q levels and region maps on tables built once.
+  // The tables depend on the camera, the probes and the guiding settings but q; each pixel's q is
+  // refreshed without rebuilding them, so an edit of q (the viewer's slider) keeps the tables.
   GuidingSettings tableSettings = g;
   tableSettings.guided_probability = 0.0f;
   tableSettings.bright_pixel_probability = 0.0f;
   const std::string key = identity + toJson(scene.desc().camera).dump() + toJson(tableSettings).dump();
-  std::string probabilityKey = std::to_string(g.guided_probability) + ";" + std::to_string(g.bright_pixel_probability) + ";";
-  for (float q : scene.guidedRegions().probability) probabilityKey += std::to_string(q) + ",";  // auto's region map
+  const std::string probabilityKey = std::to_string(g.guided_probability) + ";" + std::to_string(g.bright_pixel_probability);
   measuring_ = measuresPixelProbability(g);
   if (key == key_) {
     if (probabilityKey != probabilityKey_) {
@@ -249,9 +240,8 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
   if (!(guided > 0.0) || !(variance > 0.0) || !(relative > 0.0) || !(work > 0.0)) return false;
   work /= measuredSamples_;  // per sample, summed over pixels
   const double meanGuidedWork = guidedWork / guided;
-  // The pixels whose q is measured: a table and, under auto's region map, a q above 0 (where its
-  // pilot measured tracking ahead they stay so).
-  auto measured = [&](int x, int y) { return present_[index(x, y)] && guidedProbabilityAt(scene, x, y, width_, height_) > 0.0f; };
+  // The pixels whose q is measured: those with a table.
+  auto measured = [&](int x, int y) { return present_[index(x, y)] != 0; };
   tbb::parallel_for(0, static_cast<int>(measures_.size()), [&](int b) {
     const BlockMeasure& m = measures_[static_cast<size_t>(b)];
     const BlockRect r = blockRect(static_cast<size_t>(b));

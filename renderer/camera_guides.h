@@ -6,10 +6,10 @@
 // pixel shares it as it stands (GuidedDistance::share), a density in the distance t from the camera.
 // It then depends on the ray's pixel alone, never on the walk, so MIS stays unbiased; where a
 // jittered ray's interval reaches past the centre ray's, the tracked technique alone samples. Any
-// change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q (or region
-// map of q, or guiding.bright_pixel_probability) only refreshes each pixel's.
+// change of the key (camera, probe set, strategy but q) rebuilds the tables; a new q (or
+// guiding.bright_pixel_probability) only refreshes each pixel's.
 //
-// Each pixel's q starts from guidedProbabilityAt and, with guiding.bright_pixel_probability, grows
+// Each pixel's q starts from guiding.guided_probability and, with guiding.bright_pixel_probability, grows
 // where the probes predict that bright single scattering is the pixel's light (a sun shaft): by the
 // pixel's prediction over the image's mean, times the prediction's share against an upper bound of
 // the emission along the centre ray (emissionBoundAlongRay), up to that setting. Both come from the
@@ -46,12 +46,6 @@
 namespace candela {
 
 class PathTracer;
-
-// The one-sample probability q for the camera rays through pixel (x, y) of a width x height image:
-// the settings' guided_probability, or where `auto` chose scattering sampling by region (its
-// pilot's region map, auto_strategy.h) the q of the pixel's region, 0 where tracking alone did
-// better. A function of the pixel alone, so MIS stays unbiased.
-float guidedProbabilityAt(const Scene& scene, int x, int y, int width, int height);
 
 class CameraGuides {
  public:

@@ -154,28 +154,6 @@ double relativeVarianceAgainst(const std::vector<float>& variance, const std::ve
   return total / static_cast<double>(variance.size());
 }
 
-RegionalVariance regionalVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean, int width, int height,
-                                         int regionSize) {
-  RegionalVariance out;
-  const int size = std::max(1, regionSize);
-  out.regionsX = (width + size - 1) / size, out.regionsY = (height + size - 1) / size;
-  const size_t channels = 3 * static_cast<size_t>(width) * static_cast<size_t>(height);
-  if (variance.size() != channels || mean.size() != channels) return out;
-  const double eps = relativeEps(mean);
-  const size_t regions = static_cast<size_t>(out.regionsX) * static_cast<size_t>(out.regionsY);
-  out.relative.assign(regions, 0.0);
-  out.absolute.assign(regions, 0.0);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const size_t r = static_cast<size_t>(y / size) * static_cast<size_t>(out.regionsX) + static_cast<size_t>(x / size);
-      for (size_t i = 3 * (static_cast<size_t>(y) * width + x), end = i + 3; i < end; ++i) {
-        out.relative[r] += variance[i] / (static_cast<double>(mean[i]) * mean[i] + eps);
-        out.absolute[r] += variance[i];
-      }
-    }
-  return out;
-}
-
 ErrorMetrics imageError(const std::vector<float>& image, const std::vector<float>& reference) {
   ErrorMetrics e;
   if (image.size() != reference.size() || image.empty()) return {NAN, NAN};

@@ -45,16 +45,6 @@ double relativeEpsilon(double meanValue);
 // The relMSE one sample per pixel would have if `mean` were the reference: the mean over pixels and
 // channels of variance / (mean^2 + eps), eps as the relMSE's.
 double relativeVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean);
-// The two figures above per square region of `regionSize` pixels of a width x height image (row-major,
-// regionsX x regionsY): the sum over the region's pixels and channels of variance / (mean^2 + eps)
-// (eps from the whole image's mean) and of the variance. Several candidates' regions compare on one
-// normaliser, as their whole images do. The auto strategy's region map chooses by them.
-struct RegionalVariance {
-  int regionsX = 0, regionsY = 0;
-  std::vector<double> relative, absolute;
-};
-RegionalVariance regionalVarianceAgainst(const std::vector<float>& variance, const std::vector<float>& mean, int width, int height,
-                                         int regionSize);
 // An error map for display: per pixel, averaged over channels, |I - R| / mean(R) (absolute) or
 // |I - R| / sqrt(R^2 + eps) with the relMSE's eps (relative), in false colour on a log scale from
 // 0.01 (black) through blue, green, yellow, red to 10 (white). Interleaved RGB in [0, 1].

@@ -141,7 +141,7 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
   if (options.secondary_seed < 0) {
     GuideInspectOptions pixel = options;
     const bool chosen = pixel.guided_probability >= 0.0f;
-    if (!chosen) pixel.guided_probability = guidedProbabilityAt(scene, x, y, scene.camera().width(), scene.camera().height());
+    if (!chosen) pixel.guided_probability = scene.strategy().guiding.guided_probability;
     const GuidingSettings& g = scene.strategy().guiding;
     if (g.guide == DistanceGuide::Probes && (g.dim_pixel_floor > 0.0f || g.bright_pixel_probability > g.guided_probability) &&
         scene.probes()) {

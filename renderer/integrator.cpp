@@ -471,7 +471,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   // under from_media_unless_flame_lit (a choice by scene).
   if (st.segment > 0 && ((g.secondary_rays != SecondaryRays::All && !st.fromMedium) || !guidedContinuationsApply(scene_, g))) return false;
   const bool cached = st.segment == 0 && cameraGuide;
-  // A pixel whose q is 0 (no table, or auto's region map said tracking alone) gets no guided
+  // A pixel whose q is 0 (no table, or its block measured tracking alone ahead) gets no guided
   // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
   if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table())) return false;
   ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table (a pixel's cached one: a lookup)

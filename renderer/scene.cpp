@@ -262,7 +262,6 @@ void Scene::setStrategy(const StrategySettings& strategy) {
   waitForProbes();
   const GuidingSettings before = desc_.strategy.guiding;
   desc_.strategy = strategy;
-  guidedRegions_ = {};
   for (auto& m : media_) m->applyStrategy(strategy);
   buildLightSampler();
   const GuidingSettings& g = strategy.guiding;

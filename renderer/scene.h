@@ -87,10 +87,6 @@ class Scene {
   void applyStrategy(const StrategySettings& strategy);
   // What `auto` decided for this scene (null when the strategy is not auto).
   const AutoDecision* autoDecision() const { return autoDecision_ ? &*autoDecision_ : nullptr; }
-  // Where camera rays take guided vertices, by image region (auto's per-region choice; empty:
-  // the strategy's guided_probability everywhere). Any setStrategy clears it.
-  const GuidedRegions& guidedRegions() const { return guidedRegions_; }
-  void setGuidedRegions(GuidedRegions regions) { guidedRegions_ = std::move(regions); }
 
   // The probe set serving renders now (null without probe guiding). Safe to call while a
   // background relearn runs: the old set keeps serving until the new one is swapped in.
@@ -123,7 +119,6 @@ class Scene {
   bool sunLit_ = false;
   bool hasPerLengthEmission_ = false;
   std::optional<AutoDecision> autoDecision_;
-  GuidedRegions guidedRegions_;
   std::shared_ptr<const ProbeSet> probes_;
   std::thread probeThread_;
   std::atomic<bool> cancelProbes_{false};

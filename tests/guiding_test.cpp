@@ -471,6 +471,40 @@ TEST(CameraGuides, BrightPixelsGetTheGuidedVertexMoreOften) {
   check("assets/scenes/fire.json", true);
 }
 
+// A pixel's q follows guiding.guided_probability (raised in bright pixels up to
+// guiding.bright_pixel_probability): an edit of q refreshes every pixel's q and keeps the tables,
+// and any other guiding setting rebuilds them.
+TEST(CameraGuides, AnEditOfQRefreshesThePixelsQAndKeepsTheTables) {
+  auto scene = Scene::build(test::loadScene("assets/scenes/god-rays-dark.json", {"strategy.preset=\"full\"", "camera.resolution=[32,18]"}));
+  const PathTracer tracer(*scene);
+  CameraGuides cache;
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  auto expectPixelsAtTheSettingsQ = [&] {
+    const float q = scene->strategy().guiding.guided_probability;
+    const float bright = scene->strategy().guiding.bright_pixel_probability;
+    int withTable = 0;
+    for (int y = 0; y < 18; ++y)
+      for (int x = 0; x < 32; ++x) {
+        if (!cache.at(x, y)->table()) continue;
+        ++withTable;
+        EXPECT_FLOAT_EQ(cache.at(x, y)->guidedProbability, std::clamp(q * cache.brightness(x, y), q, std::max(q, bright))) << x << "," << y;
+      }
+    EXPECT_GT(withTable, 0);
+  };
+  expectPixelsAtTheSettingsQ();
+  StrategySettings often = scene->strategy();
+  often.guiding.guided_probability = 0.5f;
+  often.guiding.bright_pixel_probability = 0.7f;
+  scene->setStrategy(often);
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  EXPECT_EQ(cache.builds(), 1) << "a new q refreshes the pixels' q, not the tables";
+  expectPixelsAtTheSettingsQ();
+  often.guiding.floor *= 2.0f;
+  scene->setStrategy(often);
+  ASSERT_TRUE(cache.prepare(*scene, tracer, scene->camera()));
+  EXPECT_EQ(cache.builds(), 2) << "any other guiding setting rebuilds the tables";
+}
+
 // Measured q (camera_guides.h): the samples drawn at one q predict the variance another q gives,
 // from each camera vertex's direct light D and the two densities at its distance, the covariance
 // of D with the rest of the sample included. Checked against renders at q = 0.05 and q = 0.5 on

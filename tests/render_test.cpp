@@ -135,23 +135,6 @@ TEST(Film, PixelMomentsAndRelativeVarianceAgainstASharedMean) {
   EXPECT_TRUE(pixelMoments(Film(2, 1)).mean.empty()) << "below 2 spp there is no variance";
 }
 
-// The regional figures are the whole-image ones split by region: on a 3 x 2 image in 2 x 2-pixel
-// regions (2 x 1 regions, the right one a column), their sums are the image's totals, and each
-// region holds its own pixels' variance.
-TEST(Convergence, RegionalVarianceSplitsTheImagesFiguresByRegion) {
-  std::vector<float> variance(18, 0.0f), mean(18, 1.0f);
-  for (int ch = 0; ch < 3; ++ch) variance[3 * 2 + ch] = 0.5f, variance[3 * 3 + ch] = 1.0f;  // pixels (2,0) and (0,1)
-  const RegionalVariance r = regionalVarianceAgainst(variance, mean, 3, 2, 2);
-  ASSERT_EQ(r.regionsX, 2);
-  ASSERT_EQ(r.regionsY, 1);
-  ASSERT_EQ(r.absolute.size(), 2u);
-  EXPECT_NEAR(r.absolute[0], 3.0, 1e-9);
-  EXPECT_NEAR(r.absolute[1], 1.5, 1e-9);
-  EXPECT_NEAR((r.relative[0] + r.relative[1]) / 18.0, relativeVarianceAgainst(variance, mean), 1e-9);
-  EXPECT_NEAR(r.relative[0], 3.0 / 1.01, 1e-6);  // eps = (0.1 x 1)^2
-  EXPECT_TRUE(regionalVarianceAgainst(std::vector<float>(3), mean, 3, 2, 2).absolute.empty()) << "sizes that do not match";
-}
-
 TEST(Agreement, AcceptsIndependentRendersAndCatchesAThreePercentBias) {
   const SceneDesc a = test::loadScene("assets/scenes/test/furnace.json", {"render.seed=1"});
   const SceneDesc b = test::loadScene("assets/scenes/test/furnace.json", {"render.seed=2"});
