@@ -150,6 +150,7 @@ void CameraGuides::resetMeasures() {
   const int blocksY = (height_ + kMeasureBlock - 1) / kMeasureBlock;
   if (measuring_) measures_.resize(static_cast<size_t>(blocksX_) * static_cast<size_t>(blocksY));
   measuredSamples_ = 0;
+  measuredWork_ = 0.0;
   nextDecision_ = 16;
 }
 
@@ -209,9 +210,10 @@ double CameraGuides::measuredVarianceChange(size_t candidate) const {
   return change;
 }
 
-bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
+bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, double passWork) {
   if (!measuring_ || measures_.empty()) return false;
   measuredSamples_ += spp;
+  measuredWork_ += passWork;
   if (measuredSamples_ < nextDecision_) return false;
   nextDecision_ = 2 * measuredSamples_;
   const GuidingSettings& g = scene.strategy().guiding;
@@ -234,9 +236,9 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp) {
   const double eps = relativeEpsilon(meanOfMean);
   auto pixelVariance = [&](size_t i) { return std::max(0.0, sumSquares[i] / filmSpp - (sum[i] / filmSpp) * (sum[i] / filmSpp)); };
   auto inverseSquare = [&](size_t i) { return 1.0 / ((sum[i] / filmSpp) * (sum[i] / filmSpp) + eps); };
-  double variance = 0.0, relative = 0.0, work = 0.0, guidedWork = 0.0, guided = 0.0;
+  double variance = 0.0, relative = 0.0, work = measuredWork_, guidedWork = 0.0, guided = 0.0;
   for (size_t i = 0; i < sum.size(); ++i) variance += pixelVariance(i), relative += pixelVariance(i) * inverseSquare(i);
-  for (const BlockMeasure& m : measures_) work += m.work, guidedWork += m.guidedWork, guided += m.guided;
+  for (const BlockMeasure& m : measures_) guidedWork += m.guidedWork, guided += m.guided;
   if (!(guided > 0.0) || !(variance > 0.0) || !(relative > 0.0) || !(work > 0.0)) return false;
   work /= measuredSamples_;  // per sample, summed over pixels
   const double meanGuidedWork = guidedWork / guided;

@@ -83,18 +83,18 @@ class CameraGuides {
   // Measured q (guiding.measured_pixel_probability; see above). measuring(): the pixels record
   // their samples, pooled over blocks of kMeasureBlock x kMeasureBlock pixels (a pixel's own few
   // samples would choose mostly by their noise); a block lies inside one render tile, so only the
-  // thread rendering that tile writes it. record() and addPixelWork() come from that thread.
+  // thread rendering that tile writes it. record() comes from that thread.
   // restart() puts every pixel back at its predicted q (a fresh film: the same command gives the
-  // same image); passFinished() sets the measured q at 16, 32, 64... samples since then and says
-  // whether it did. The candidates are kMeasuredProbabilities up to the larger of
+  // same image); passFinished() takes the pass's work (WorkCounters::cost(), summed over its tiles:
+  // read per pixel, the counters' conversions were 3% of a `full` camera sample in 1-spp passes),
+  // sets the measured q at 16, 32, 64... samples since then and says whether it did. The candidates are kMeasuredProbabilities up to the larger of
   // guiding.guided_probability and guiding.bright_pixel_probability.
   static constexpr std::array<float, 6> kMeasuredProbabilities{0.0f, 0.05f, 0.1f, 0.2f, 0.35f, 0.5f};
   static constexpr int kMeasureBlock = 8;
   bool measuring() const { return measuring_; }
   void record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample);
-  void addPixelWork(int x, int y, double work) { measures_[block(x, y)].work += work; }
   void restart(const Scene& scene);
-  bool passFinished(const Scene& scene, const Film& film, int spp);
+  bool passFinished(const Scene& scene, const Film& film, int spp, double passWork);
   size_t measuredDecisions() const { return measuredDecisions_; }  // how many times passFinished set q
   // What the samples recorded since the last restart predict for kMeasuredProbabilities[candidate]
   // everywhere: the change of the image's variance per sample, summed over pixels and channels
@@ -120,7 +120,7 @@ class CameraGuides {
   // Sums over a block's recorded samples. D: the camera vertex's direct light; R: the rest of the
   // sample.
   struct BlockMeasure {
-    double samples = 0.0, work = 0.0, guided = 0.0, guidedWork = 0.0;
+    double samples = 0.0, guided = 0.0, guidedWork = 0.0;
     // Per channel: the change in the sum of the samples' squares that each candidate q' would
     // bring, (D p_q / p_q')^2-type terms less D^2 and twice the same for R D (see above).
     std::array<std::array<double, 3>, kMeasuredProbabilities.size()> change{};
@@ -129,6 +129,7 @@ class CameraGuides {
   int blocksX_ = 0;
   bool measuring_ = false;
   int measuredSamples_ = 0, nextDecision_ = 16;
+  double measuredWork_ = 0.0;  // the passes' work since the last restart
   size_t measuredDecisions_ = 0;
   void resetMeasures();
 

@@ -49,7 +49,6 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
         // The next pixel's guide (one cache line) arrives while this pixel's samples run.
         if (cachedGuides && x + 1 < x1) __builtin_prefetch(cameraGuides_.at(x + 1, y));
         const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
-        const double pixelWork = measure ? threadWork().cost() : 0.0;
         for (int s = 0; s < spp; ++s) {
           Rng rng(hashCombine(pixelKey, static_cast<uint64_t>(firstSample + s)), pixelKey);
           const float jx = rng.uniform(), jy = rng.uniform();
@@ -59,7 +58,6 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
           pass.addSample(x, y, value);
           if (record.table) cameraGuides_.record(x, y, record, value);
         }
-        if (measure) cameraGuides_.addPixelWork(x, y, threadWork().cost() - pixelWork);
       }
     WorkCounters& mine = passWork.local();
     mine += threadWork() - before;
@@ -83,8 +81,10 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   if (cancelled) return false;
   pass.setPassSpp(spp);
   film.addPass(pass);
-  for (const WorkCounters& w : passWork) work_ += w;
-  if (measure) cameraGuides_.passFinished(*scene_, film, spp);
+  WorkCounters passTotal;
+  for (const WorkCounters& w : passWork) passTotal += w;
+  work_ += passTotal;
+  if (measure) cameraGuides_.passFinished(*scene_, film, spp, passTotal.cost());
   return true;
 }
 

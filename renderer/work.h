@@ -43,8 +43,8 @@ struct WorkCounters {
   }
   // The cost in nanoseconds of one core of the calibration machine: constants fitted once by least
   // squares against render time (candela-cli calibrate, docs/performance.md, "The auto strategy"); never the clock.
-  // Inline: measured q reads it twice per pixel and pass and once per guided vertex (camera_guides.h),
-  // and out of line it was 0.5% of a `full` render of fire.
+  // Inline: measured q reads it twice per guided vertex of a measured pixel and once per pass
+  // (camera_guides.h); out of line it was 0.5% of a `full` render of fire.
   double cost() const {
     using C = WorkCost;
     return C::kSample * static_cast<double>(samples) + C::kCollision * static_cast<double>(collisions) +
