@@ -261,9 +261,10 @@ AutoDecision decide(Scene& scene) {
   // not rebuild (camera_guides.h).
   ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
-  // other pilot image) and measures it. The per-pixel moments go to `moments`. An image that only measures (!keepSamples: the
-  // fresh round's second look at its rival, the plain candidate's under a sun) renders from indices
-  // the image never uses, so the kept ones stay 0 to kept.spp() - 1, where the render continues.
+  // other pilot image) and measures it. The per-pixel moments go to `moments`. An image that only
+  // measures (!keepSamples: the fresh round's second look at its rival, the plain candidate's under
+  // a sun) renders from indices the image never uses, so the kept ones stay 0 to kept.spp() - 1,
+  // where the render continues.
   int nextUnkeptSample = 1 << 28;
   auto measure = [&](const AutoCandidate& c, PixelMoments& moments, bool keepSamples = true) {
     const bool hadProbes = scene.probes() != nullptr;

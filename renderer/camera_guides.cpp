@@ -242,8 +242,6 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
   if (!(guided > 0.0) || !(variance > 0.0) || !(relative > 0.0) || !(work > 0.0)) return false;
   work /= measuredSamples_;  // per sample, summed over pixels
   const double meanGuidedWork = guidedWork / guided;
-  // The pixels whose q is measured: those with a table.
-  auto measured = [&](int x, int y) { return present_[index(x, y)] != 0; };
   tbb::parallel_for(0, static_cast<int>(measures_.size()), [&](int b) {
     const BlockMeasure& m = measures_[static_cast<size_t>(b)];
     const BlockRect r = blockRect(static_cast<size_t>(b));
@@ -253,7 +251,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
     double blockVariance[3] = {0.0, 0.0, 0.0}, blockRelative[3] = {0.0, 0.0, 0.0}, blockInverse[3] = {0.0, 0.0, 0.0};
     for (int y = r.y0; y < r.y1; ++y)
       for (int x = r.x0; x < r.x1; ++x) {
-        if (!measured(x, y)) continue;
+        if (!present_[index(x, y)]) continue;  // no table: no q to measure
         const size_t i = index(x, y);
         pixels += 1.0;
         for (int ch = 0; ch < 3; ++ch) {
@@ -279,7 +277,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
     }
     for (int y = r.y0; y < r.y1; ++y)
       for (int x = r.x0; x < r.x1; ++x)
-        if (measured(x, y)) guides_[index(x, y)].guidedProbability = best;
+        if (present_[index(x, y)]) guides_[index(x, y)].guidedProbability = best;
   });
   ++measuredDecisions_;
   return true;

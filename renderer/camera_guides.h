@@ -87,8 +87,9 @@ class CameraGuides {
   // restart() puts every pixel back at its predicted q (a fresh film: the same command gives the
   // same image); passFinished() takes the pass's work (WorkCounters::cost(), summed over its tiles:
   // read per pixel, the counters' conversions were 3% of a `full` camera sample in 1-spp passes),
-  // sets the measured q at 16, 32, 64... samples since then and says whether it did. The candidates are kMeasuredProbabilities up to the larger of
-  // guiding.guided_probability and guiding.bright_pixel_probability.
+  // sets the measured q at 16, 32, 64... samples since then and says whether it did. The
+  // candidates are kMeasuredProbabilities up to the larger of guiding.guided_probability and
+  // guiding.bright_pixel_probability.
   static constexpr std::array<float, 6> kMeasuredProbabilities{0.0f, 0.05f, 0.1f, 0.2f, 0.35f, 0.5f};
   static constexpr int kMeasureBlock = 8;
   bool measuring() const { return measuring_; }

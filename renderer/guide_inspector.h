@@ -14,8 +14,9 @@
 //            It integrates to the probability of scattering before tOut (less than 1).
 // - mis:     the mixture the strategy's MIS draws from: q p_g + (1 - q) p_t under one-sample MIS
 //            (guiding.combination = one_sample), q the ray's guided probability
-//            (guiding.guided_probability on camera rays, raised in bright pixels by guiding.bright_pixel_probability (camera_guides.h),
-//            guiding.secondary_probability on later ones); p_g alone for guided_only;
+//            (guiding.guided_probability on camera rays, raised in bright pixels by
+//            guiding.bright_pixel_probability (camera_guides.h), guiding.secondary_probability
+//            on later ones); p_g alone for guided_only;
 //            (p_g + p_t) / 2 when each technique draws one sample (balance, power, average).
 // Variance factor of a density p: V = int f^2 / p dt / (int f dt)^2. 1 is perfect importance
 // sampling; V - 1 is the relative variance of the one-sample estimator f / p (for the tracked
