@@ -55,7 +55,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   width_ = camera.width();
   height_ = camera.height();
   const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  guides_.assign(pixels, CameraRayGuide{0.0f, PiecewiseLinearView{}});
+  guides_.assign(pixels, CameraRayGuide{});
   present_.assign(pixels, 0);
   // Rows in parallel, each into its own buffer, which the row's views point into and which keeps its
   // capacity for the next rebuild. Copied into one flat array and freed, as they were, they made a
@@ -80,9 +80,9 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       rayEnd[i] = tOut;
       table.build(tIn, tOut, guide.knots, g.floor);
       const PiecewiseLinearView v = table.view();
-      PiecewiseLinearView& stored = guides_[i].view;
-      stored = v;
-      stored.ts = stored.vs = stored.cdf = nullptr;  // pointed into the row below, once it stops growing
+      CameraRayGuide& stored = guides_[i];
+      stored.n = v.n, stored.t0 = v.t0, stored.t1 = v.t1, stored.area = v.area, stored.uniformShare = v.uniformShare;
+      // `data` points into the row below once it stops growing.
       offsets[static_cast<size_t>(y)][static_cast<size_t>(x)] = static_cast<uint32_t>(row.size());
       row.insert(row.end(), v.ts, v.ts + v.n);
       row.insert(row.end(), v.vs, v.vs + v.n);
@@ -134,11 +134,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
       if (!present_[i]) continue;
-      PiecewiseLinearView& v = guides_[i].view;
-      const float* start = row.data() + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
-      v.ts = start;
-      v.vs = start + v.n;
-      v.cdf = start + 2 * v.n;
+      guides_[i].data = row.data() + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
     }
   }
   return true;

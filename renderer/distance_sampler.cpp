@@ -136,7 +136,7 @@ float GuidedDistance::sample(float u, float& pdf) const {
   switch (kind_) {
     case Kind::Linear: return linear_.sample(u, pdf);
     case Kind::EquiAngular: return equiAngular_.sample(u, pdf);
-    case Kind::Shared: return shared_->sample(u, pdf);
+    case Kind::Shared: return shared_.sample(u, pdf);
   }
   pdf = 0.0f;
   return 0.0f;
@@ -146,7 +146,7 @@ float GuidedDistance::pdf(float t) const {
   switch (kind_) {
     case Kind::Linear: return linear_.pdf(t);
     case Kind::EquiAngular: return equiAngular_.pdf(t);
-    case Kind::Shared: return shared_->pdf(t);
+    case Kind::Shared: return shared_.pdf(t);
   }
   return 0.0f;
 }

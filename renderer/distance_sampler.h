@@ -61,14 +61,20 @@ struct PiecewiseLinearView {
 // What a pixel's camera rays use for their guided sample (renderer/camera_guides.h): the pixel's
 // table, and the one-sample probability q of keeping the guided vertex. q = 0: the
 // pixel's rays get no guided sample at all (tracking alone serves them).
-// One cache line per pixel, the view stored inline: a camera ray reads its q and its table's
-// header in one line, and can prefetch the table itself before its walk (PathTracer::prepareGuide).
-struct alignas(64) CameraRayGuide {
-  float guidedProbability = 0.5f;
-  PiecewiseLinearView view;  // its arrays stay null for a pixel without a table
-  // The pixel's table, or null: no guided sample for this pixel.
-  const PiecewiseLinearView* table() const { return view.ts ? &view : nullptr; }
+// 32 bytes per pixel: the table's header and q, its ts, vs and cdf back to back from `data`. In the
+// viewer's, bench's and report's 1-spp passes every camera sample reads its pixel's entry from
+// memory no other sample of the pass touches; with the view's three pointers stored inline an
+// entry took a whole 64-byte line (docs/performance.md, "The camera-ray guide in 32 bytes").
+struct alignas(32) CameraRayGuide {
+  const float* data = nullptr;  // ts, vs, cdf (n each); null: no table, no guided sample
+  uint32_t n = 0;
+  float t0 = 0.0f, t1 = 1.0f, area = 0.0f, uniformShare = 1.0f;
+  float guidedProbability = 0.0f;
+
+  bool hasTable() const { return data != nullptr; }
+  PiecewiseLinearView view() const { return {data, data + n, data + 2 * n, n, t0, t1, area, uniformShare}; }
 };
+static_assert(sizeof(CameraRayGuide) == 32, "one guide entry per pixel: half a cache line");
 
 class PiecewiseLinearDistance {
  public:
@@ -126,9 +132,10 @@ class GuidedDistance {
   // From `knots` (sorted and clamped here).
   void buildPiecewiseLinear(float t0, float t1, float floor);
   void buildEquiAngular(const Ray& ray, float t0, float t1, const std::vector<EquiAngularTarget>& targets);
-  // Shares `table` (a pixel's cached camera-ray density over its centre ray's medium interval,
-  // renderer/camera_guides.h, which outlives this density's use) instead of building one.
-  void share(const PiecewiseLinearView* table) { kind_ = Kind::Shared, shared_ = table; }
+  // Shares `table` (a view of a pixel's cached camera-ray density over its centre ray's medium
+  // interval, renderer/camera_guides.h, whose arrays outlive this density's use) instead of
+  // building one.
+  void share(const PiecewiseLinearView& table) { kind_ = Kind::Shared, shared_ = table; }
 
   float sample(float u, float& pdf) const;
   float pdf(float t) const;
@@ -137,7 +144,7 @@ class GuidedDistance {
   enum class Kind { Linear, EquiAngular, Shared } kind_ = Kind::Linear;
   PiecewiseLinearDistance linear_;
   EquiAngularDistance equiAngular_;
-  const PiecewiseLinearView* shared_ = nullptr;
+  PiecewiseLinearView shared_;
 };
 
 }  // namespace candela

@@ -151,8 +151,8 @@ GuideInspection inspectGuide(const Scene& scene, int x, int y, const GuideInspec
       const PathTracer tracer(scene);
       tables.prepare(scene, tracer, scene.camera());
       const CameraRayGuide* guide = tables.at(x, y);
-      pixel.dim_pixel = guide->table() == nullptr && tables.predictedLight(x, y) > 0.0f;
-      if (!chosen && guide->table()) pixel.guided_probability = guide->guidedProbability;
+      pixel.dim_pixel = !guide->hasTable() && tables.predictedLight(x, y) > 0.0f;
+      if (!chosen && guide->hasTable()) pixel.guided_probability = guide->guidedProbability;
     }
     GuideInspection r = inspectGuideAlongRay(scene, camera, 0, pixel);
     if (!chosen && r.guided && measuresPixelProbability(g))

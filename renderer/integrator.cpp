@@ -473,7 +473,7 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   const bool cached = st.segment == 0 && cameraGuide;
   // A pixel whose q is 0 (no table, or its block measured tracking alone ahead) gets no guided
   // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
-  if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->table())) return false;
+  if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->hasTable())) return false;
   ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table (a pixel's cached one: a lookup)
   guide.guidedProbability = cached ? cameraGuide->guidedProbability : st.segment > 0 ? g.secondary_probability : g.guided_probability;
   if (cached) {
@@ -481,10 +481,10 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
     // pixel, as the thickness test made once for that ray is. Its table lies in memory no other
     // camera ray touches this pass: fetching it while the walk runs takes a cache miss off the
     // scattering's pdf (docs/performance.md, "Camera-ray tables in the cache").
-    const PiecewiseLinearView* table = cameraGuide->table();
-    __builtin_prefetch(table->ts);
-    __builtin_prefetch(table->vs);
-    __builtin_prefetch(table->cdf);
+    const PiecewiseLinearView table = cameraGuide->view();
+    __builtin_prefetch(table.ts);
+    __builtin_prefetch(table.vs);
+    __builtin_prefetch(table.cdf);
     guide.share(table);
     return true;
   }
@@ -635,7 +635,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng,
     // where the pixel's q is 0 the walk still keeps p_t (a product it otherwise skips), so that
     // the pixel can learn what guiding would give it.
     CameraVertexRecord* const rec =
-        record && st.segment == 0 && cameraGuide && cameraGuide->table() && strategy.guiding.combination == GuideCombination::OneSample
+        record && st.segment == 0 && cameraGuide && cameraGuide->hasTable() && strategy.guiding.combination == GuideCombination::OneSample
             ? record
             : nullptr;
     if (rec) rec->table = true, rec->q = guided ? guide.guidedProbability : 0.0f;
@@ -656,7 +656,7 @@ Rgb PathTracer::trace(PathState st, const CameraRayGuide* cameraGuide, Rng& rng,
     const bool scattered = walk.event == SegmentWalk::Event::Scattered;
     const bool trackedCounts = scattered && !(oneSample && guidedPicked);
     const float scatterGuidedPdf =
-        trackedCounts && guided ? guide.pdf(walk.scatterT) : trackedCounts && rec ? cameraGuide->table()->pdf(walk.scatterT) : 0.0f;
+        trackedCounts && guided ? guide.pdf(walk.scatterT) : trackedCounts && rec ? cameraGuide->view().pdf(walk.scatterT) : 0.0f;
     const float scatterTrackedPdf = walk.nullProbability * walk.scatterDensity;
     if (rec && trackedCounts) rec->guidedPdf = scatterGuidedPdf, rec->trackedPdf = scatterTrackedPdf;
 

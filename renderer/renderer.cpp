@@ -46,7 +46,7 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
           cancelled = true;
           return;
         }
-        // The next pixel's guide (one cache line) arrives while this pixel's samples run.
+        // The next pixel's guide entry (half a cache line) arrives while this pixel's samples run.
         if (cachedGuides && x + 1 < x1) __builtin_prefetch(cameraGuides_.at(x + 1, y));
         const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
         for (int s = 0; s < spp; ++s) {

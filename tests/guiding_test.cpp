@@ -315,7 +315,7 @@ TEST(GuideInspector, MisCurveIsTheStrategysMixture) {
     const PathTracer tracer(*scene);
     CameraGuides tables;
     ASSERT_TRUE(tables.prepare(*scene, tracer, scene->camera()));
-    ASSERT_TRUE(tables.at(1, 1)->table());
+    ASSERT_TRUE(tables.at(1, 1)->hasTable());
     const float q = tables.at(1, 1)->guidedProbability;
     EXPECT_GT(q, 0.1f) << "the pixel beside the light is bright";
     check({}, -1, q);
@@ -371,7 +371,7 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
   for (int y = 0; y < 48; ++y)
     for (int x = 0; x < 48; ++x) {
       const float light = cache.predictedLight(x, y);
-      const bool hasTable = cache.at(x, y)->table() != nullptr;
+      const bool hasTable = cache.at(x, y)->hasTable();
       if (light <= 0.0f) {
         EXPECT_FALSE(hasTable) << x << "," << y;
         continue;
@@ -386,7 +386,7 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
   // The guide inspector says so for a dim pixel, and its MIS curve is the tracked density alone.
   for (int y = 0, shown = 0; y < 48 && !shown; ++y)
     for (int x = 0; x < 48 && !shown; ++x) {
-      if (cache.at(x, y)->table() || !(cache.predictedLight(x, y) > 0.0f)) continue;
+      if (cache.at(x, y)->hasTable() || !(cache.predictedLight(x, y) > 0.0f)) continue;
       GuideInspectOptions options;
       options.bins = 16;
       options.light_samples = 2;
@@ -408,7 +408,7 @@ TEST(CameraGuides, DimPixelsAreLeftToTracking) {
   ASSERT_TRUE(all.prepare(*unfloored, tracer0, unfloored->camera()));
   EXPECT_EQ(all.dimPixels(), 0u);
   for (int y = 0; y < 48; ++y)
-    for (int x = 0; x < 48; ++x) EXPECT_EQ(all.at(x, y)->table() != nullptr, all.predictedLight(x, y) > 0.0f) << x << "," << y;
+    for (int x = 0; x < 48; ++x) EXPECT_EQ(all.at(x, y)->hasTable(), all.predictedLight(x, y) > 0.0f) << x << "," << y;
 }
 
 // guiding.bright_pixel_probability raises a pixel's q where the probes predict bright single
@@ -433,7 +433,7 @@ TEST(CameraGuides, BrightPixelsGetTheGuidedVertexMoreOften) {
     for (int y = 0; y < 36; ++y)
       for (int x = 0; x < 64; ++x) {
         const CameraRayGuide* guide = cache.at(x, y);
-        if (!guide->table()) {
+        if (!guide->hasTable()) {
           EXPECT_EQ(guide->guidedProbability, 0.0f) << x << "," << y;
           continue;
         }
@@ -463,7 +463,7 @@ TEST(CameraGuides, BrightPixelsGetTheGuidedVertexMoreOften) {
     EXPECT_EQ(cache.builds(), builds);
     for (int y = 0; y < 36; ++y)
       for (int x = 0; x < 64; ++x)
-        if (cache.at(x, y)->table()) {
+        if (cache.at(x, y)->hasTable()) {
           EXPECT_EQ(cache.at(x, y)->guidedProbability, 0.1f) << x << "," << y;
         }
   };
@@ -485,7 +485,7 @@ TEST(CameraGuides, AnEditOfQRefreshesThePixelsQAndKeepsTheTables) {
     int withTable = 0;
     for (int y = 0; y < 18; ++y)
       for (int x = 0; x < 32; ++x) {
-        if (!cache.at(x, y)->table()) continue;
+        if (!cache.at(x, y)->hasTable()) continue;
         ++withTable;
         EXPECT_FLOAT_EQ(cache.at(x, y)->guidedProbability, std::clamp(q * cache.brightness(x, y), q, std::max(q, bright))) << x << "," << y;
       }
@@ -574,7 +574,7 @@ TEST(CameraGuides, MeasuredQIsTheSameOnAnyThreadCount) {
     for (int y = 0; y < 27; ++y)
       for (int x = 0; x < 48; ++x) {
         const CameraRayGuide* guide = cache.at(x, y);
-        if (!guide->table()) continue;
+        if (!guide->hasTable()) continue;
         pixels.push_back(guide->guidedProbability);
         const auto& candidates = CameraGuides::kMeasuredProbabilities;
         EXPECT_NE(std::find(candidates.begin(), candidates.end(), guide->guidedProbability), candidates.end()) << x << "," << y;
@@ -612,8 +612,8 @@ TEST(CameraGuides, TablesEqualPerRayDensities) {
       const CameraRayGuide* pixel = cache.at(x, y);
       // Dim pixels are left to tracking (CameraGuides.DimPixelsAreLeftToTracking).
       const bool dim = cache.predictedLight(x, y) < cache.dimThreshold();
-      ASSERT_EQ(guided && !dim, pixel->table() != nullptr) << x << "," << y;
-      if (!pixel->table()) {
+      ASSERT_EQ(guided && !dim, pixel->hasTable()) << x << "," << y;
+      if (!pixel->hasTable()) {
         EXPECT_EQ(pixel->guidedProbability, 0.0f) << "no table, no guided sample";
         continue;
       }
@@ -621,7 +621,7 @@ TEST(CameraGuides, TablesEqualPerRayDensities) {
       EXPECT_FLOAT_EQ(pixel->guidedProbability, std::clamp(g.guided_probability * cache.brightness(x, y), g.guided_probability,
                                                            std::max(g.guided_probability, g.bright_pixel_probability)))
           << "q by the pixel's predicted brightness (CameraGuides.BrightPixelsGetTheGuidedVertexMoreOften)";
-      shared.share(pixel->table());
+      shared.share(pixel->view());
       for (int k = 0; k <= 16; ++k) {
         const float t = tIn + (tOut - tIn) * (k + 0.01f) / 16.02f;
         EXPECT_NEAR(shared.pdf(t), direct.pdf(t), 1e-3f * direct.pdf(t) + 1e-6f) << x << "," << y << " t " << t;
