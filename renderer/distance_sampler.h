@@ -73,6 +73,12 @@ struct alignas(32) CameraRayGuide {
 
   bool hasTable() const { return data != nullptr; }
   PiecewiseLinearView view() const { return {data, data + n, data + 2 * n, n, t0, t1, area, uniformShare}; }
+  // Asks for every cache line of the table (ts, vs and cdf, 12 n bytes) ahead of its use.
+  void prefetchTable() const {
+    const uintptr_t end = reinterpret_cast<uintptr_t>(data + 3 * n);
+    for (uintptr_t line = reinterpret_cast<uintptr_t>(data) & ~uintptr_t{63}; line < end; line += 64)
+      __builtin_prefetch(reinterpret_cast<const void*>(line));
+  }
 };
 static_assert(sizeof(CameraRayGuide) == 32, "one guide entry per pixel: half a cache line");
 

@@ -471,21 +471,22 @@ bool PathTracer::prepareGuide(const PathState& st, float tEnd, const CameraRayGu
   // under from_media_unless_flame_lit (a choice by scene).
   if (st.segment > 0 && ((g.secondary_rays != SecondaryRays::All && !st.fromMedium) || !guidedContinuationsApply(scene_, g))) return false;
   const bool cached = st.segment == 0 && cameraGuide;
-  // A pixel whose q is 0 (no table, or its block measured tracking alone ahead) gets no guided
-  // sample: a choice by pixel alone, so the tracked technique alone is unbiased there.
-  if (cached && !(cameraGuide->guidedProbability > 0.0f && cameraGuide->hasTable())) return false;
+  if (cached) {
+    if (!cameraGuide->hasTable()) return false;
+    // The pixel's table lies in memory no other camera ray touches this pass: fetching all of it
+    // while the walk runs takes the cache misses off the scattering's pdf (docs/performance.md,
+    // "Camera-ray tables in the cache"), which a pixel whose q is measured evaluates even at q = 0.
+    cameraGuide->prefetchTable();
+    // A pixel whose q is 0 (its block measured tracking alone ahead) gets no guided sample: a
+    // choice by pixel alone, so the tracked technique alone is unbiased there.
+    if (!(cameraGuide->guidedProbability > 0.0f)) return false;
+  }
   ++threadWork().guides;  // an interval, a majorant walk for the thickness test, a table (a pixel's cached one: a lookup)
   guide.guidedProbability = cached ? cameraGuide->guidedProbability : st.segment > 0 ? g.secondary_probability : g.guided_probability;
   if (cached) {
     // The pixel's cached table (camera_guides.h), over its centre ray's medium interval: a choice by
-    // pixel, as the thickness test made once for that ray is. Its table lies in memory no other
-    // camera ray touches this pass: fetching it while the walk runs takes a cache miss off the
-    // scattering's pdf (docs/performance.md, "Camera-ray tables in the cache").
-    const PiecewiseLinearView table = cameraGuide->view();
-    __builtin_prefetch(table.ts);
-    __builtin_prefetch(table.vs);
-    __builtin_prefetch(table.cdf);
-    guide.share(table);
+    // pixel, as the thickness test made once for that ray is.
+    guide.share(cameraGuide->view());
     return true;
   }
   float tIn = 0.0f, tOut = 0.0f;
