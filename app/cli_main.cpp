@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <numeric>
 #include <fstream>
 #include <sstream>
 
@@ -117,9 +118,8 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
       std::printf("work per sample by kind: collisions %.2f, segments %.2f, rays %.2f, knots %.2f, guided %.3f, guides %.3f\n",
                   w.collisions / n, w.segments / n, w.rays / n, w.knots / n, w.guided / n, w.guides / n);
       if (const CameraGuides& guides = renderer.cameraGuides(); guides.bytes() > 0) {
-        size_t tables = 0;
-        for (int y = 0; y < film.height(); ++y)
-          for (int x = 0; x < film.width(); ++x) tables += guides.at(x, y)->hasTable() ? 1 : 0;
+        const std::vector<size_t> byProbability = guides.pixelsByProbability();  // every pixel with a table, by q
+        const size_t tables = std::accumulate(byProbability.begin(), byProbability.end(), size_t{0});
         std::printf("camera-ray tables: %zu of %d pixels, %.2f MB with the guide entries\n", tables, film.width() * film.height(),
                     static_cast<double>(guides.bytes()) / 1e6);
       }

@@ -24,7 +24,7 @@ void CameraGuides::refreshProbabilities(const Scene& scene) {
   for (int y = 0; y < height_; ++y)
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      if (present_[i]) guides_[i].guidedProbability = probabilityAt(scene, x, y);
+      if (guides_[i].hasTable()) guides_[i].guidedProbability = probabilityAt(scene, x, y);
     }
 }
 
@@ -56,7 +56,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   height_ = camera.height();
   const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
   guides_.assign(pixels, CameraRayGuide{});
-  present_.assign(pixels, 0);
+  std::vector<char> present(pixels, 0);  // while the tables are built: the pixels that keep one
   // Rows in parallel, each into its own buffer, which the row's views point into and which keeps its
   // capacity for the next rebuild. Copied into one flat array and freed, as they were, they made a
   // camera move's rebuild take 116 ms instead of 80 (docs/performance.md, "Camera-ray tables after
@@ -87,7 +87,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
       row.insert(row.end(), v.ts, v.ts + v.n);
       row.insert(row.end(), v.vs, v.vs + v.n);
       row.insert(row.end(), v.cdf, v.cdf + v.n);
-      present_[i] = 1;
+      present[i] = 1;
     }
   });
   // Dim pixels are left to tracking (guiding.dim_pixel_floor): a choice by pixel, from the probes'
@@ -98,7 +98,18 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   dimThreshold_ = static_cast<float>(g.dim_pixel_floor * sum / static_cast<double>(std::max<size_t>(1, pixels)));
   dimPixels_ = 0;
   for (size_t i = 0; i < pixels; ++i)
-    if (present_[i] && predicted_[i] < dimThreshold_) present_[i] = 0, guides_[i].guidedProbability = 0.0f, ++dimPixels_;
+    if (present[i] && predicted_[i] < dimThreshold_) present[i] = 0, ++dimPixels_;
+  // The kept pixels' tables in their rows, which have stopped growing (a dim pixel's table stays in
+  // its row, unused): from here a pixel has a table exactly where its entry points to one.
+  bytes_ = 0;
+  for (int y = 0; y < height_; ++y) {
+    const std::vector<float>& row = rows_[static_cast<size_t>(y)];
+    bytes_ += row.size() * sizeof(float);
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      if (present[i]) guides_[i].data = row.data() + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
+    }
+  }
   // Bright pixels (guiding.bright_pixel_probability): the prediction over the mean, times its share
   // against the emission the centre ray may see. The share keeps a flame's pixels, whose light and
   // noise are their own emission, at the base q: raising it there only buys light samples of the
@@ -112,7 +123,7 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   if (mean > 0.0) tbb::parallel_for(0, height_, [&](int y) {
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      if (!present_[i]) continue;
+      if (!guides_[i].hasTable()) continue;
       const double relative = predicted_[i] / mean;
       double share = 1.0;
       if (emits && relative > 1.0) {
@@ -126,17 +137,6 @@ bool CameraGuides::prepare(const Scene& scene, const PathTracer& tracer, const C
   });
   refreshProbabilities(scene);
   resetMeasures();
-  // The kept pixels' views into their rows (a dim pixel's table stays in its row, unused).
-  bytes_ = 0;
-  for (int y = 0; y < height_; ++y) {
-    const std::vector<float>& row = rows_[static_cast<size_t>(y)];
-    bytes_ += row.size() * sizeof(float);
-    for (int x = 0; x < width_; ++x) {
-      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      if (!present_[i]) continue;
-      guides_[i].data = row.data() + offsets[static_cast<size_t>(y)][static_cast<size_t>(x)];
-    }
-  }
   return true;
 }
 
@@ -185,7 +185,7 @@ void CameraGuides::record(int x, int y, const PathTracer::CameraVertexRecord& ve
 std::vector<size_t> CameraGuides::pixelsByProbability() const {
   std::vector<size_t> counts(kMeasuredProbabilities.size() + 1, 0);
   for (size_t i = 0; i < guides_.size(); ++i) {
-    if (!present_[i]) continue;
+    if (!guides_[i].hasTable()) continue;
     const auto at = std::find(kMeasuredProbabilities.begin(), kMeasuredProbabilities.end(), guides_[i].guidedProbability);
     ++counts[static_cast<size_t>(at - kMeasuredProbabilities.begin())];
   }
@@ -199,7 +199,7 @@ double CameraGuides::measuredVarianceChange(size_t candidate) const {
     const BlockRect r = blockRect(b);
     double pixels = 0.0;
     for (int y = r.y0; y < r.y1; ++y)
-      for (int x = r.x0; x < r.x1; ++x) pixels += present_[index(x, y)] ? 1.0 : 0.0;
+      for (int x = r.x0; x < r.x1; ++x) pixels += guides_[index(x, y)].hasTable() ? 1.0 : 0.0;
     if (!(m.samples > 0.0) || !(pixels > 0.0)) continue;
     for (int ch = 0; ch < 3; ++ch) change += m.change[candidate][ch] / (m.samples / pixels);
   }
@@ -247,7 +247,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
     double blockVariance[3] = {0.0, 0.0, 0.0}, blockRelative[3] = {0.0, 0.0, 0.0}, blockInverse[3] = {0.0, 0.0, 0.0};
     for (int y = r.y0; y < r.y1; ++y)
       for (int x = r.x0; x < r.x1; ++x) {
-        if (!present_[index(x, y)]) continue;  // no table: no q to measure
+        if (!guides_[index(x, y)].hasTable()) continue;  // no table: no q to measure
         const size_t i = index(x, y);
         pixels += 1.0;
         for (int ch = 0; ch < 3; ++ch) {
@@ -273,7 +273,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
     }
     for (int y = r.y0; y < r.y1; ++y)
       for (int x = r.x0; x < r.x1; ++x)
-        if (present_[index(x, y)]) guides_[index(x, y)].guidedProbability = best;
+        if (guides_[index(x, y)].hasTable()) guides_[index(x, y)].guidedProbability = best;
   });
   ++measuredDecisions_;
   return true;

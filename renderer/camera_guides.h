@@ -61,7 +61,7 @@ class CameraGuides {
     return &guides_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   }
   size_t bytes() const {
-    return bytes_ + guides_.size() * (sizeof(CameraRayGuide) + 1);
+    return bytes_ + guides_.size() * sizeof(CameraRayGuide);
   }
   int builds() const { return builds_; }  // how many times the tables were (re)built
   // The probes' prediction of the light scattered along the pixel's centre ray (knotsIntegral; 0
@@ -140,7 +140,6 @@ class CameraGuides {
   std::vector<std::vector<float>> rows_;  // per image row, each pixel's ts, vs, cdf, back to back
   size_t bytes_ = 0;                       // the rows' tables
   std::vector<CameraRayGuide> guides_;  // each pixel's table view and q
-  std::vector<char> present_;
   std::vector<float> predicted_;
   std::vector<float> brightness_;  // see brightness()
   float probabilityAt(const Scene& scene, int x, int y) const;  // the pixel's q (a pixel with a table)
