@@ -429,36 +429,60 @@ int scatteringMedium(const Collision& c, float pick) {
 
 PathTracer::SegmentWalk PathTracer::walkSegment(PathState& st, float tEnd, bool guided, std::vector<WalkCollision>* record, float emissionWeight,
                                                 Rgb& L, Rng& rng) const {
-  const bool gather = scene_.strategy().emission.gather_every_collision;
+  const EmissionSettings& e = scene_.strategy().emission;
+  const bool gather = e.gather_every_collision;
   const bool emissive = scene_.hasEmissiveMedia();
   const bool perLength = scene_.hasPerLengthEmission();
+  // Emission past the scattering (docs/method.md s.2): the segment's emission by ratio tracking over
+  // the same collisions, L += beta_0 w S / mu_bar with w the running product of mu_n / mu_bar, an
+  // estimate of int T S dt by itself (talk Algorithm 1). Where the tracked walk scatters or is
+  // absorbed, this estimate walks on to the last point where a medium may emit, so the emission
+  // behind the scattering point is no longer lost to this sample and made up by others.
+  const bool pastScattering = gather && emissive &&
+                              (e.gather_past_scattering == PastScattering::AllRays ||
+                               (e.gather_past_scattering == PastScattering::CameraRays && st.segment == 0));
+  const Rgb emissionBeta = st.beta * emissionWeight;  // the segment's throughput before the walk
+  float emissionRatio = 1.0f;
+  bool trackedDone = false;  // the tracked walk ended; only the emission estimate walks on
+  float emissionEnd = 0.0f;  // where it may stop: past it no medium emits
   if (record) record->clear();
   SegmentWalk walk;
   GatherRoulette roulette;
   const bool through = trackCollisions(scene_.media(), st.ray, tEnd, rng, [&](const Collision& c) {
+    if (pastScattering && emissionRatio > 0.0f) {
+      if (trackedDone && c.t > emissionEnd) return false;
+      L += emissionBeta * c.emissionSource() * (emissionRatio / c.muBar);
+      emissionRatio *= std::max(0.0f, 1.0f - c.sigmaTTotal / c.muBar);
+      rouletteSmallWeight(emissionRatio, rng);
+    }
+    if (trackedDone) return emissionRatio > 0.0f;
     const CollisionCoefficients k(c);
     if (record) record->push_back({c.t, k.sigmaS, k.sigmaN, c.muBar});
     const float u = rng.uniform();
     float pick = 0.0f;
-    const Decision d = gather ? gatherEvent(c, k, u, emissive, emissionWeight, guided, st.beta, L, roulette, walk.nullProbability,
-                                            walk.scatterDensity, pick, rng)
+    const Decision d = gather ? gatherEvent(c, k, u, emissive && !pastScattering, emissionWeight, guided, st.beta, L, roulette,
+                                            walk.nullProbability, walk.scatterDensity, pick, rng)
                               : analogEvent(c, k, u, emissive, perLength, emissionWeight, st.beta, L, walk.nullProbability, walk.scatterDensity,
                                             pick);
     if (d == Decision::Continue) return true;
     if (d == Decision::Absorb) {
       walk.event = SegmentWalk::Event::Absorbed;
-      return false;
+    } else {
+      // Scattering: weight the chosen medium's RGB albedo against the average used to pick it.
+      const Medium& m = c.medium(scatteringMedium(c, pick));
+      st.beta *= m.albedo() / m.albedoAverage();
+      walk.scatterG = m.g();
+      walk.scatterPos = c.p;
+      walk.scatterT = c.t;
+      walk.event = SegmentWalk::Event::Scattered;
     }
-    // Scattering: weight the chosen medium's RGB albedo against the average used to pick it.
-    const Medium& m = c.medium(scatteringMedium(c, pick));
-    st.beta *= m.albedo() / m.albedoAverage();
-    walk.scatterG = m.g();
-    walk.scatterPos = c.p;
-    walk.scatterT = c.t;
-    walk.event = SegmentWalk::Event::Scattered;
-    return false;
+    if (!pastScattering || !(emissionRatio > 0.0f)) return false;
+    // The emission estimate walks on only as far as a medium may emit.
+    emissionEnd = c.t + lastEmissionAlongRay(scene_.media(), Ray{c.p, st.ray.direction}, tEnd - c.t);
+    trackedDone = true;
+    return emissionEnd > c.t;
   });
-  if (record) walk.coveredT = through ? tEnd : record->back().t;
+  if (record) walk.coveredT = through && !trackedDone ? tEnd : record->back().t;
   return walk;
 }
 

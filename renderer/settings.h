@@ -57,6 +57,18 @@ struct MajorantPolicy {
   }
 };
 
+// Which ray segments gather their emission past the point where their tracked walk scatters
+// (EmissionSettings::gather_past_scattering; docs/method.md s.2, "Emission past the scattering").
+enum class PastScattering { Off, CameraRays, AllRays };
+template <>
+struct EnumNames<PastScattering> {
+  static const std::vector<std::pair<PastScattering, const char*>>& get() {
+    static const std::vector<std::pair<PastScattering, const char*>> v{
+        {PastScattering::Off, "off"}, {PastScattering::CameraRays, "camera_rays"}, {PastScattering::AllRays, "all_rays"}};
+    return v;
+  }
+};
+
 // Emission sampling (talk s.2.1; docs/method.md s.2 and s.3).
 struct EmissionSettings {
   bool gather_every_collision = false;  // P_a = P_n = 1: add mu_a Le / mu_bar at every collision
@@ -66,6 +78,10 @@ struct EmissionSettings {
   // energy-grid direction density) instead of from the phase function, scaled at each vertex by the
   // light sampler's share of those volumes there; one-sample MIS over the mixture (docs/method.md s.3b).
   float continuation_toward_volumes = 0.0f;
+  // With gather_every_collision: a segment's emission by ratio tracking along the whole segment
+  // (talk Algorithm 1), continued past the point where its tracked walk scatters, instead of only
+  // up to it. A flame seen through a scattering medium is then no longer all or nothing per sample.
+  PastScattering gather_past_scattering = PastScattering::Off;
 
   template <class V>
   void visit(V& v) {
@@ -79,6 +95,10 @@ struct EmissionSettings {
             "them at the vertex), the rest by the phase function; the mixture's pdf weights both, so the image is unchanged. "
             "Reaches the glow that a flame lights in the medium around it. Needs light_sampling; 0: phase sampling only",
             Range{0.0, 0.9});
+    v.field("gather_past_scattering", gather_past_scattering,
+            "With gather_every_collision: which ray segments gather their emission along the whole segment by ratio tracking, "
+            "continuing past the point where the path scatters (off, camera_rays, all_rays), instead of only up to it; a flame "
+            "behind a scattering medium then stops being all or nothing per sample. The image is unchanged");
   }
 };
 

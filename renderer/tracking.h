@@ -316,4 +316,25 @@ inline double emissionBoundAlongRay(const MediaView& view, const Ray& ray, float
   return bound;
 }
 
+// The far end of the emission along a ray: the largest t <= tMax where some emissive medium may emit
+// (the exit of the last majorant cell with a positive emission maximum), 0 when none can. tMax for
+// an emissive medium without maxima (nothing bounds it). Counted as the DDA segments it walks.
+inline float lastEmissionAlongRay(const MediaView& view, const Ray& ray, float tMax) {
+  float last = 0.0f;
+  for (const Medium* medium : view.media) {
+    if (!medium->emissive()) continue;
+    const std::vector<float>& maxima = medium->emissionMaxima();
+    if (maxima.empty() || medium->majorantGrid().empty()) return tMax;
+    const Mat4& ifw = medium->indexFromWorld();
+    MajorantDda dda(medium->majorantGrid(), Vec3(ifw * glm::vec4(ray.origin, 1.0f)), Vec3(ifw * glm::vec4(ray.direction, 0.0f)), 0.0f, tMax);
+    float t0 = 0.0f, t1 = 0.0f;
+    int cell = 0;
+    while (dda.next(t0, t1, cell)) {
+      ++threadWork().segments;
+      if (maxima[static_cast<size_t>(cell)] > 0.0f) last = std::max(last, t1);
+    }
+  }
+  return last;
+}
+
 }  // namespace candela

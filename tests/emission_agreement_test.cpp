@@ -6,8 +6,10 @@
 // glow-box and closed-form slab tests; a 10% bias in the volume-NEE term alone (about 3% of the
 // pixels it lights) fails glow-box, a large emitter lighting a scattering volume and a floor where
 // conventional tracking is well-behaved. A 10% bias in the weight of upward continuations toward
-// emissive volumes (docs/method.md s.3b) fails glow-box (per-unit-length) and torch-in-mist. On fire and torch-in-mist conventional's estimate of
-// a small bright flame is heavy-tailed, so those tests only catch gross (~10%+) biases at CI budgets.
+// emissive volumes (docs/method.md s.3b) fails glow-box (per-unit-length) and torch-in-mist. A 10% bias in
+// the emission gathered past the scattering (s.2) fails both glow-box tests on all rays. On fire and
+// torch-in-mist conventional's estimate of a small bright flame is heavy-tailed, so those tests only
+// catch gross (~10%+) biases at CI budgets.
 #include "blackbody.h"
 #include "stats.h"
 #include "test_support.h"
@@ -35,6 +37,11 @@ const std::vector<Variant>& variants() {
       // docs/method.md s.3b: continuations aimed at the volumes, at the largest share and not at all.
       {"continuations toward volumes", {"strategy.emission.light_sampling=true", "strategy.emission.continuation_toward_volumes=0.9"}},
       {"emission preset, phase continuations", {"strategy.preset=\"emission\"", "strategy.emission.continuation_toward_volumes=0"}},
+      // docs/method.md s.2, "Emission past the scattering": on every segment, and on camera rays
+      // without light sampling (the continued estimate then carries all the emission).
+      {"emission preset, past scattering on all rays", {"strategy.preset=\"emission\"", "strategy.emission.gather_past_scattering=\"all_rays\""}},
+      {"gathering only, past scattering on camera rays",
+       {"strategy.emission.gather_every_collision=true", "strategy.emission.gather_past_scattering=\"camera_rays\""}},
   };
   return v;
 }
