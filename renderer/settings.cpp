@@ -25,8 +25,9 @@ StrategySettings strategyPreset(const std::string& name, const std::string& orig
     // A camera ray's emission by ratio tracking all the way through the flames, not only up to
     // where the ray scatters (docs/method.md s.2, "Emission past the scattering"): a flame seen through
     // smoke, mist or fog is then no longer all or nothing per sample. Per sample, against off
-    // (docs/performance.md, "Emission past the scattering"): 18-30% less variance for 1-5% more work
-    // on fire, torch-in-mist and torch-in-fog; on the rays after the camera ray it bought nothing.
+    // (docs/performance.md, "Emission past the scattering"): 9-32% less variance for 1-5% more work
+    // on fire, torch-in-mist, torch-in-fog and shed-fire; on the rays after the camera ray it bought
+    // nothing more.
     s.emission.gather_past_scattering = PastScattering::CameraRays;
     // Talk s.2.2: plus probe-guided distance sampling with MIS (the talk's Fig. 1 right), or the
     // equi-angular baseline in the same MIS slot.
