@@ -46,6 +46,10 @@ int main(int argc, char** argv) {
   app.add_option("--redo", o.redoSteps, "Scripted: then redo this many")->check(CLI::NonNegativeNumber);
   app.add_option("--save-as", o.saveAsPath, "Scripted: then save the scene (with every edit) to this JSON file");
   app.add_option("--drop", o.dropPath, "Scripted: open this file as if dropped on the window, once the first scene shows");
+  app.add_flag("--edit-while-loading", o.editWhileLoading,
+               "Scripted: apply the --edit edits as soon as the --drop file starts loading (an artist editing during a long load)");
+  app.add_option("--hold-builds", o.holdBuildsMs, "Scripted: hold every scene build back this many milliseconds (a long load, for tests)")
+      ->check(CLI::Range(0, 60000));
   app.add_flag("--snapshot-compare", o.snapshotCompare,
                "Scripted: snapshot the image at --after-spp, apply the --edit edits, compare the live render with it in the wipe view");
   app.add_option("--frame-steps", o.frameSteps, "Scripted: step the timeline this many frames, timing each frame's first image")

@@ -187,6 +187,22 @@ elseif(MODE STREQUAL "open_vdb")
               --after-spp 4 --quit)
   metadata(${OUT}/dropped.png document document)
   expect_contains("${document}" "cloud.json")
+  # Edited while it loads (each build held back a second): the edits stay on the opened file, and
+  # auto exposure does not replace the exposure the artist set.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/cloud.vdb --hold-builds 1000
+              --edit-while-loading --edit render.seed=7 --edit display.exposure=1.25 --screenshot ${OUT}/dropped-edited.png
+              --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "scripted: 2 edits made while loading")
+  metadata(${OUT}/dropped-edited.png document document)
+  expect_contains("${document}" "cloud.json")
+  metadata(${OUT}/dropped-edited.png settings settings)
+  string(JSON seed GET "${settings}" render seed)
+  metadata(${OUT}/dropped-edited.png display display)
+  string(JSON exposure GET "${display}" exposure)
+  metadata(${OUT}/dropped-edited.png unsaved_edits unsaved)
+  if(NOT seed EQUAL 7 OR NOT exposure EQUAL 1.25 OR NOT unsaved STREQUAL "yes")
+    message(FATAL_ERROR "edits made while the dropped file loaded were lost: seed ${seed}, exposure ${exposure}, unsaved edits ${unsaved}")
+  endif()
 elseif(MODE STREQUAL "save")
   # Edit, save as, reopen: the reopened scene renders the same samples as the edited one.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[160,90] --edit volumes.1.g=0.3

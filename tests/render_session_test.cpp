@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <thread>
 
@@ -118,7 +119,7 @@ TEST(RenderSession, BadEditKeepsTheLastGoodSceneAndRestoresItsFields) {
   const uint64_t id = session.edit(bad);
   // The error arrives as a message naming the file and field; the fields go back.
   std::vector<std::string> messages;
-  std::optional<SceneDesc> restored;
+  std::optional<RenderSession::ShownDesc> restored;
   for (int i = 0; i < 3000 && (messages.empty() || !restored); ++i) {
     for (auto& m : session.takeMessages()) messages.push_back(m);
     if (!restored) restored = session.takeShownDesc();
@@ -128,7 +129,9 @@ TEST(RenderSession, BadEditKeepsTheLastGoodSceneAndRestoresItsFields) {
   EXPECT_NE(messages.front().find("does-not-exist.vdb"), std::string::npos) << messages.front();
   EXPECT_NE(messages.front().find("volumes.0"), std::string::npos) << messages.front();
   ASSERT_TRUE(restored);
-  EXPECT_TRUE(restored->volumes[0].has_generator);
+  EXPECT_FALSE(restored->opened);
+  EXPECT_EQ(restored->request, id);
+  EXPECT_TRUE(restored->desc.volumes[0].has_generator);
   // And the last good scene keeps refining.
   const int spp = session.latest()->film.spp();
   EXPECT_TRUE(waitFor(session, [&](const Frame& f) { return f.request >= id && f.film.spp() > spp + 2; }));
@@ -156,6 +159,138 @@ TEST(RenderSession, BrokenSceneOpenKeepsTheCurrentScene) {
   EXPECT_EQ(frame->scene->path, test::assetPath("assets/scenes/test/slab.json"));
   const int spp = frame->film.spp();
   EXPECT_TRUE(waitFor(session, [&](const Frame& f) { return f.film.spp() > spp; }));
+}
+
+// Holds the session's builds back until released: requests made meanwhile arrive while a build runs,
+// as an artist's do during a long load.
+class BuildGate {
+ public:
+  // The hook shares the gate's state, so a build that reaches it after the gate is gone is safe.
+  // Declare the gate after the session: its destructor opens the gate before the session joins.
+  void attach(RenderSession& session) {
+    session.setBuildHook([state = state_](const SceneDesc& desc) {
+      std::unique_lock<std::mutex> lock(state->mutex);
+      state->building.push_back(desc.path);
+      state->changed.notify_all();
+      state->changed.wait(lock, [&] { return state->open; });
+    });
+  }
+  // Waits until `count` builds have reached the gate.
+  bool waitForBuilds(size_t count) {
+    std::unique_lock<std::mutex> lock(state_->mutex);
+    return state_->changed.wait_for(lock, std::chrono::seconds(30), [&] { return state_->building.size() >= count; });
+  }
+  void release() {
+    std::lock_guard<std::mutex> lock(state_->mutex);
+    state_->open = true;
+    state_->changed.notify_all();
+  }
+  ~BuildGate() { release(); }
+
+ private:
+  struct State {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::vector<std::string> building;
+    bool open = false;
+  };
+  std::shared_ptr<State> state_ = std::make_shared<State>();
+};
+
+// Collects every shown-description update until `pred` holds for one (or the time runs out).
+template <class Pred>
+std::vector<RenderSession::ShownDesc> takeShownUntil(RenderSession& session, Pred pred) {
+  std::vector<RenderSession::ShownDesc> shown;
+  for (int i = 0; i < 15000; ++i) {
+    if (auto s = session.takeShownDesc()) {
+      shown.push_back(*s);
+      if (pred(shown.back())) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return shown;
+}
+
+TEST(RenderSession, EditsMadeWhileASceneOpensApplyToTheOpenedScene) {
+  RenderSession session;
+  BuildGate gate;
+  gate.attach(session);
+  session.setLimits(ProgressLimits{6, 0.0f});
+  const SceneDesc opened = smallScene("assets/scenes/test/slab.json");
+  const uint64_t openId = session.open(opened);
+  ASSERT_TRUE(gate.waitForBuilds(1));
+  // While it loads, the artist changes a live setting (the worker applies it without a rebuild).
+  SceneDesc edited = opened;
+  edited.strategy.majorant.emission_weight = 7.0f;
+  const uint64_t liveEdit = session.edit(edited);
+  EXPECT_GT(liveEdit, openId);
+  gate.release();
+  // The open reports itself by its own id, so the UI knows the file it waits for has loaded...
+  const auto shown = takeShownUntil(session, [](const RenderSession::ShownDesc& s) { return s.opened; });
+  ASSERT_FALSE(shown.empty());
+  EXPECT_TRUE(shown.back().opened);
+  EXPECT_EQ(shown.back().request, openId);
+  // ...and what renders is the opened scene with the edit, never the open's fields alone.
+  auto frame = waitFor(session, [&](const Frame& f) { return f.finished; });
+  ASSERT_TRUE(frame);
+  EXPECT_GE(frame->request, liveEdit);
+  EXPECT_EQ(frame->scene->strategy.majorant.emission_weight, 7.0f);
+  EXPECT_EQ(frame->film.spp(), 6);
+  EXPECT_FALSE(session.takeShownDesc()) << "nothing may send the fields back to the scene as opened";
+}
+
+TEST(RenderSession, AnEditBeforeTheOpensBuildStartsKeepsTheOpensId) {
+  RenderSession session;
+  BuildGate gate;
+  gate.attach(session);
+  session.open(smallScene("assets/scenes/test/slab.json"));
+  ASSERT_TRUE(gate.waitForBuilds(1));  // the first scene builds; the next open waits in the queue
+  const SceneDesc second = smallScene("assets/scenes/test/glow-box.json");
+  const uint64_t openId = session.open(second);
+  SceneDesc edited = second;
+  edited.volumes[0].g = 0.2f;  // structural: the queued open builds it
+  session.edit(edited);
+  gate.release();
+  const auto shown = takeShownUntil(session, [&](const RenderSession::ShownDesc& s) { return s.request == openId; });
+  ASSERT_FALSE(shown.empty());
+  EXPECT_EQ(shown.back().request, openId);
+  EXPECT_TRUE(shown.back().opened);
+  EXPECT_FLOAT_EQ(shown.back().desc.volumes[0].g, 0.2f);
+}
+
+TEST(RenderSession, AnOpenReplacedWhileItLoadsIsNeverShown) {
+  // Every published frame (the notification runs right after publishing); declared before the
+  // session, whose threads may notify until it is destroyed.
+  std::mutex mutex;
+  std::vector<std::string> framePaths;
+  RenderSession session;
+  BuildGate gate;
+  session.setNotify([&] {
+    auto f = session.latest();
+    std::lock_guard<std::mutex> lock(mutex);
+    if (f && f->scene) framePaths.push_back(f->scene->path);
+  });
+  gate.attach(session);
+  session.setLimits(ProgressLimits{4, 0.0f});
+  const SceneDesc first = smallScene("assets/scenes/test/slab.json");
+  SceneDesc broken = first;
+  broken.volumes[0].has_generator = false;
+  broken.volumes[0].file = "missing-replaced.vdb";
+  session.open(broken);
+  ASSERT_TRUE(gate.waitForBuilds(1));
+  // A second file dropped while the first loads: the first, here a broken one, is forgotten.
+  const SceneDesc second = smallScene("assets/scenes/test/glow-box.json");
+  const uint64_t secondId = session.open(second);
+  gate.release();
+  const auto shown = takeShownUntil(session, [&](const RenderSession::ShownDesc& s) { return s.request == secondId; });
+  ASSERT_EQ(shown.size(), 1u);
+  EXPECT_EQ(shown[0].request, secondId);
+  EXPECT_TRUE(shown[0].opened);
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return f.finished; }));
+  for (const auto& m : session.takeMessages()) EXPECT_EQ(m.find("missing-replaced.vdb"), std::string::npos) << m;
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_FALSE(framePaths.empty());
+  for (const auto& p : framePaths) EXPECT_EQ(p, second.path);
 }
 
 TEST(RenderSession, SceneDiffSeparatesLiveEditsFromRebuilds) {

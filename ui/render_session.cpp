@@ -53,7 +53,10 @@ uint64_t RenderSession::edit(const SceneDesc& desc) {
   const uint64_t id = ++nextRequest_;
   // Structural changes (volumes, lights, surfaces) need a build; the worker applies the strategy,
   // camera and render settings itself, to whichever scene it has.
-  if (!lastRequested_ || diffScenes(*lastRequested_, desc).structure) {
+  if (buildRequest_ && buildIsOpen_) {
+    // An open not yet started builds the edited scene; it keeps the open's id, which the UI waits for.
+    buildRequest_->desc = desc;
+  } else if (!lastRequested_ || diffScenes(*lastRequested_, desc).structure) {
     buildRequest_ = Target{desc, id};
     loading_ = true;
     loaderWake_.notify_one();
@@ -85,7 +88,7 @@ std::vector<std::string> RenderSession::takeMessages() {
   return std::exchange(messages_, {});
 }
 
-std::optional<SceneDesc> RenderSession::takeShownDesc() {
+std::optional<RenderSession::ShownDesc> RenderSession::takeShownDesc() {
   std::lock_guard<std::mutex> lock(mutex_);
   return std::exchange(shownDescUpdate_, std::nullopt);
 }
@@ -125,6 +128,7 @@ void RenderSession::loaderLoop() {
       std::lock_guard<std::mutex> lock(mutex_);
       serving = shownProbes_;
     }
+    if (buildHook_) buildHook_(request.desc);
     try {
       const auto buildStart = std::chrono::steady_clock::now();
       scene = Scene::build(request.desc, &warnings, serving);
@@ -135,14 +139,21 @@ void RenderSession::loaderLoop() {
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      for (const auto& w : warnings) messages_.push_back("warning: " + w);
-      if (scene) {
+      // A newer open queued while this one built replaces it, as if it had never been asked for:
+      // the UI neither shows nor reports a file it has already moved on from.
+      const bool superseded = isOpen && buildRequest_ && buildIsOpen_;
+      if (!superseded)
+        for (const auto& w : warnings) messages_.push_back("warning: " + w);
+      if (superseded) {
+        // Nothing to show; the newer open is next.
+      } else if (scene) {
         builtScene_ = scene;
         builtRequest_ = request.request;
         if (isOpen) {
-          shownDescUpdate_ = request.desc;
-          // An open replaces whatever the UI was editing.
-          target_ = Target{request.desc, request.request};
+          shownDescUpdate_ = ShownDesc{request.desc, request.request, true};
+          // An open replaces what the UI showed before it; edits made while it built are newer
+          // requests on top of it (edit() sent them after this open) and stay the target.
+          if (!target_ || target_->request < request.request) target_ = Target{request.desc, request.request};
         }
         cancelPass_ = true;
         workerWake_.notify_one();
@@ -152,7 +163,7 @@ void RenderSession::loaderLoop() {
         // The UI's fields go back to what is rendering, unless a newer request is queued.
         if (!buildRequest_) {
           if (shownDesc_) {
-            shownDescUpdate_ = *shownDesc_;
+            shownDescUpdate_ = ShownDesc{*shownDesc_, request.request, false};
             target_ = Target{*shownDesc_, request.request};
             lastRequested_ = *shownDesc_;
           } else {

@@ -61,14 +61,24 @@ class RenderSession {
   // Called on the worker or loader thread whenever a frame or message is published (the viewer wakes
   // its event loop with it). Set before the first request.
   void setNotify(std::function<void()> notify) { notify_ = std::move(notify); }
+  // Called on the loader thread before each build, with the description it is about to build (tests
+  // hold a build back with it, to make requests while it runs). Set before the first request.
+  void setBuildHook(std::function<void(const SceneDesc&)> hook) { buildHook_ = std::move(hook); }
 
   // The newest frame (null before the first). Cheap: a shared pointer copy.
   std::shared_ptr<const Frame> latest() const;
   // Messages for the user (build errors, warnings); each is returned once.
   std::vector<std::string> takeMessages();
-  // After an open succeeds, the description now shown; after a failed build, the last good one, so
-  // the UI's fields return to what is rendering. Each is returned once.
-  std::optional<SceneDesc> takeShownDesc();
+  // After an open succeeds, the description it opened (`opened`); after a failed build, the last
+  // good one, so the UI's fields return to what is rendering. `request` is the open's or the failed
+  // build's request id. Each is returned once. An open that a newer open replaced before it finished
+  // is never shown and reports nothing; edits made while an open builds apply to the opened scene.
+  struct ShownDesc {
+    SceneDesc desc;
+    uint64_t request = 0;
+    bool opened = false;
+  };
+  std::optional<ShownDesc> takeShownDesc();
   bool loading() const { return loading_.load(); }
   // A finished open whose description the UI has not taken yet (takeShownDesc): loading() is
   // already false then, but a scene did load.
@@ -111,9 +121,10 @@ class RenderSession {
 
   std::shared_ptr<const Frame> latest_;
   std::vector<std::string> messages_;
-  std::optional<SceneDesc> shownDescUpdate_;
+  std::optional<ShownDesc> shownDescUpdate_;
 
   std::function<void()> notify_;
+  std::function<void(const SceneDesc&)> buildHook_;
   std::thread worker_, loader_;
 };
 

@@ -109,9 +109,22 @@ void ScriptedDriver::step(Viewer& v) {
     return;
   }
   if (!o.dropPath.empty() && !dropped_) {
+    if (waitingForFullFrame(v)) return;  // once the first scene shows
     // As if the file were dropped on the window: the same path as a real drop.
     dropped_ = true;
     v.droppedPaths_.push_back(o.dropPath);
+    return;
+  }
+  if (o.editWhileLoading && dropped_ && !editsDone_ && v.droppedPaths_.empty()) {
+    // The dropped file has started to open (pollDrops ran): edit it while it loads.
+    const bool loading = v.pendingOpen_ != 0;
+    for (const auto& e : o.editsAfterStart) {
+      v.applySettingEdit(e);
+      v.history_.endGroup();
+    }
+    editsDone_ = true;
+    std::printf("scripted: %zu edits made %s %s\n", o.editsAfterStart.size(), loading ? "while loading" : "after loading", o.dropPath.c_str());
+    std::fflush(stdout);
     return;
   }
   if (waitingForFullFrame(v)) return;

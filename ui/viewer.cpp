@@ -40,6 +40,8 @@ Viewer::Viewer(GLFWwindow* window, const ViewerOptions& options)
   openStart_ = ViewerClock::now();
   openLatencyPending_ = true;
   session_.setNotify([] { glfwPostEmptyEvent(); });  // thread-safe: wakes the event wait in run()
+  if (options.holdBuildsMs > 0)
+    session_.setBuildHook([ms = options.holdBuildsMs](const SceneDesc&) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); });
   colors_ = ColorPipeline::load(options.ocioConfig);
   if (!colors_.message().empty()) report(colors_.message());
   display_ = colors_.resolve(display_);
@@ -91,6 +93,7 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     display_ = colors_.resolve(desc.display);
     autoExposurePending_ = vdb;
     applyDisplay();
+    openedExposure_ = display_.exposure;
     edited_ = desc;
     edited_.display = display_;
     frames_ = sceneFrames(desc);
@@ -100,6 +103,7 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     comparedSnapshot_ = 0;
     openStart_ = ViewerClock::now();
     openLatencyPending_ = true;
+    openingScene_ = desc;
     pendingOpen_ = session_.open(desc);
     updateTitle();
   } catch (const std::exception& e) {
@@ -300,13 +304,21 @@ void Viewer::applyDisplay() {
 
 void Viewer::pollSession() {
   for (const auto& m : session_.takeMessages()) report(m);
-  // After an open, the scene as loaded (also what Reset camera returns to); after a failed build,
-  // the last good scene, so the fields show what is rendering.
   if (auto shown = session_.takeShownDesc()) {
-    const std::string path = edited_.path;
-    edited_ = *shown;
-    if (!pendingOpen_ && !path.empty()) edited_.path = path;
-    if (pendingOpen_) fileScene_ = *shown, pendingOpen_ = 0;
+    if (shown->opened) {
+      // The open finished. The fields already hold its scene and any edits made while it loaded
+      // (they went to the session after the open, which applies them on top): keep them.
+      if (shown->request == pendingOpen_) fileScene_ = openingScene_, pendingOpen_ = 0;
+    } else {
+      // A failed build: the fields go back to the last good scene, which is what renders.
+      const std::string path = edited_.path;
+      edited_ = shown->desc;
+      if (pendingOpen_ && shown->request >= pendingOpen_) {
+        fileScene_ = shown->desc, pendingOpen_ = 0;  // the open (or an edit made while it loaded) failed
+      } else if (!path.empty()) {
+        edited_.path = path;
+      }
+    }
     haveScene_ = true;
   }
   auto latest = session_.latest();
@@ -335,6 +347,8 @@ void Viewer::pollSession() {
       frameVolume();
     }
     // Auto exposure on open: from the first image with a few samples, so noise does not decide it.
+    // Not over an exposure the artist set while the file loaded.
+    if (autoExposurePending_ && display_.exposure != openedExposure_) autoExposurePending_ = false;
     if (autoExposurePending_ && full && latest->film.spp() >= 4 && !pendingOpen_) {
       autoExposurePending_ = false;
       display_.exposure = autoExposureStops(latest->film.meanImage());

@@ -46,6 +46,10 @@ struct ViewerOptions {
   std::string saveAsPath;
   // Open this file as if it were dropped on the window, once the first scene is shown.
   std::string dropPath;
+  // Apply the edits as soon as the dropped file starts loading, as an artist edits during a long load.
+  bool editWhileLoading = false;
+  // Hold every scene build back this many milliseconds: a long load, for tests.
+  int holdBuildsMs = 0;
   // Keep a snapshot of the first image (at --after-spp), apply the edits, compare in the wipe view.
   bool snapshotCompare = false;
   // Step the timeline forward this many frames, timing each step's first image.

@@ -158,10 +158,12 @@ class Viewer {
   bool haveScene_ = false;
   SceneDesc edited_;     // what the panels edit
   SceneDesc fileScene_;  // as opened (camera reset)
+  SceneDesc openingScene_;  // the file being opened (pendingOpen_): fileScene_ once it loads
   EditHistory history_;
   bool gestureActive_ = false;  // a drag or a widget edit in progress: its edits are one undo step
   ViewerClock::time_point lastWheel_;
   bool autoExposurePending_ = false;
+  float openedExposure_ = 0.0f;  // the exposure an open started with: auto exposure never replaces the artist's
   bool reframeOnNextImage_ = false;  // after the up axis changes: frame the volume once it is rebuilt
   std::string importSummary_;
   std::string title_;
