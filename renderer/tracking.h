@@ -297,23 +297,34 @@ inline Rgb emissionAlongRay(const MediaView& view, const Ray& ray, float tMax, R
   return radiance;
 }
 
-// An upper bound of the emission along a ray, without its transmittance: int_0^tMax lum(S(t)) dt <=
-// the sum over the majorant cells it crosses of each emissive medium's cell maximum of lum(S) times
-// the length inside. Deterministic and cheap (no lookups), for choices that must depend on the ray
-// alone (camera_guides.h). Infinite for an emissive medium without maxima (nothing bounds it).
-inline double emissionBoundAlongRay(const MediaView& view, const Ray& ray, float tMax) {
-  double bound = 0.0;
+// Visits the majorant cells each emissive medium's DDA crosses along a ray, in medium order:
+// visit(t0, t1, the cell's emission maximum). False, and stops, at an emissive medium without
+// maxima (nothing bounds its emission). No lookups: what it reports depends on the ray alone.
+template <class Visit>
+inline bool forEachEmissionCell(const MediaView& view, const Ray& ray, float tMax, Visit&& visit) {
   for (const Medium* medium : view.media) {
     if (!medium->emissive()) continue;
     const std::vector<float>& maxima = medium->emissionMaxima();
-    if (maxima.empty() || medium->majorantGrid().empty()) return std::numeric_limits<double>::infinity();
+    if (maxima.empty() || medium->majorantGrid().empty()) return false;
     const Mat4& ifw = medium->indexFromWorld();
     MajorantDda dda(medium->majorantGrid(), Vec3(ifw * glm::vec4(ray.origin, 1.0f)), Vec3(ifw * glm::vec4(ray.direction, 0.0f)), 0.0f, tMax);
     float t0 = 0.0f, t1 = 0.0f;
     int cell = 0;
-    while (dda.next(t0, t1, cell)) bound += static_cast<double>(maxima[static_cast<size_t>(cell)]) * std::max(0.0f, t1 - t0);
+    while (dda.next(t0, t1, cell)) visit(t0, t1, maxima[static_cast<size_t>(cell)]);
   }
-  return bound;
+  return true;
+}
+
+// An upper bound of the emission along a ray, without its transmittance: int_0^tMax lum(S(t)) dt <=
+// the sum over the majorant cells it crosses of each emissive medium's cell maximum of lum(S) times
+// the length inside. Deterministic and cheap, for choices that must depend on the ray alone
+// (camera_guides.h). Infinite for an emissive medium without maxima (nothing bounds it).
+inline double emissionBoundAlongRay(const MediaView& view, const Ray& ray, float tMax) {
+  double bound = 0.0;
+  const bool bounded = forEachEmissionCell(view, ray, tMax, [&](float t0, float t1, float maximum) {
+    bound += static_cast<double>(maximum) * std::max(0.0f, t1 - t0);
+  });
+  return bounded ? bound : std::numeric_limits<double>::infinity();
 }
 
 // The far end of the emission along a ray: the largest t <= tMax where some emissive medium may emit
@@ -321,20 +332,11 @@ inline double emissionBoundAlongRay(const MediaView& view, const Ray& ray, float
 // an emissive medium without maxima (nothing bounds it). Counted as the DDA segments it walks.
 inline float lastEmissionAlongRay(const MediaView& view, const Ray& ray, float tMax) {
   float last = 0.0f;
-  for (const Medium* medium : view.media) {
-    if (!medium->emissive()) continue;
-    const std::vector<float>& maxima = medium->emissionMaxima();
-    if (maxima.empty() || medium->majorantGrid().empty()) return tMax;
-    const Mat4& ifw = medium->indexFromWorld();
-    MajorantDda dda(medium->majorantGrid(), Vec3(ifw * glm::vec4(ray.origin, 1.0f)), Vec3(ifw * glm::vec4(ray.direction, 0.0f)), 0.0f, tMax);
-    float t0 = 0.0f, t1 = 0.0f;
-    int cell = 0;
-    while (dda.next(t0, t1, cell)) {
-      ++threadWork().segments;
-      if (maxima[static_cast<size_t>(cell)] > 0.0f) last = std::max(last, t1);
-    }
-  }
-  return last;
+  const bool bounded = forEachEmissionCell(view, ray, tMax, [&](float, float t1, float maximum) {
+    ++threadWork().segments;
+    if (maximum > 0.0f) last = std::max(last, t1);
+  });
+  return bounded ? last : tMax;
 }
 
 }  // namespace candela
