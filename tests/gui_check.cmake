@@ -203,6 +203,22 @@ elseif(MODE STREQUAL "open_vdb")
   if(NOT seed EQUAL 7 OR NOT exposure EQUAL 1.25 OR NOT unsaved STREQUAL "yes")
     message(FATAL_ERROR "edits made while the dropped file loaded were lost: seed ${seed}, exposure ${exposure}, unsaved edits ${unsaved}")
   endif()
+  # A dropped scene whose VDB is missing fails to build: the document stays the scene that still
+  # renders, so Save can never write it over the file that failed.
+  get_filename_component(scenes ${SCENE} DIRECTORY)
+  file(READ ${scenes}/cloud.json broken)
+  string(JSON broken REMOVE "${broken}" volumes 0 generator)
+  string(JSON broken SET "${broken}" volumes 0 file "\"missing-drop.vdb\"")
+  file(WRITE ${OUT}/broken-drop.json "${broken}")
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/broken-drop.json
+              --screenshot ${OUT}/dropped-broken.png --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "missing-drop.vdb")
+  expect_contains("${LAST_OUTPUT}" "the document is still")
+  metadata(${OUT}/dropped-broken.png document document)
+  metadata(${OUT}/dropped-broken.png scene scene)
+  if(document MATCHES "broken-drop" OR scene MATCHES "broken-drop")
+    message(FATAL_ERROR "after a failed drop the document is the file that failed: ${document}, ${scene}")
+  endif()
 elseif(MODE STREQUAL "save")
   # Edit, save as, reopen: the reopened scene renders the same samples as the edited one.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[160,90] --edit volumes.1.g=0.3

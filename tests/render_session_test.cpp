@@ -165,6 +165,8 @@ TEST(RenderSession, BrokenSceneOpenKeepsTheCurrentScene) {
 // as an artist's do during a long load.
 class BuildGate {
  public:
+  // The first `passing` builds go through at once; the gate holds the ones after them.
+  explicit BuildGate(size_t passing = 0) { state_->passing = passing; }
   // The hook shares the gate's state, so a build that reaches it after the gate is gone is safe.
   // Declare the gate after the session: its destructor opens the gate before the session joins.
   void attach(RenderSession& session) {
@@ -172,6 +174,7 @@ class BuildGate {
       std::unique_lock<std::mutex> lock(state->mutex);
       state->building.push_back(desc.path);
       state->changed.notify_all();
+      if (state->building.size() <= state->passing) return;
       state->changed.wait(lock, [&] { return state->open; });
     });
   }
@@ -192,6 +195,7 @@ class BuildGate {
     std::mutex mutex;
     std::condition_variable changed;
     std::vector<std::string> building;
+    size_t passing = 0;
     bool open = false;
   };
   std::shared_ptr<State> state_ = std::make_shared<State>();
@@ -291,6 +295,36 @@ TEST(RenderSession, AnOpenReplacedWhileItLoadsIsNeverShown) {
   std::lock_guard<std::mutex> lock(mutex);
   ASSERT_FALSE(framePaths.empty());
   for (const auto& p : framePaths) EXPECT_EQ(p, second.path);
+}
+
+TEST(RenderSession, AFailedEditWhileASceneOpensReturnsTheFieldsToTheOpenedScene) {
+  RenderSession session;
+  BuildGate gate(1);  // the first scene loads; the second is held while the artist edits it
+  gate.attach(session);
+  const SceneDesc first = smallScene("assets/scenes/test/slab.json");
+  session.open(first);
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return !f.preview && f.film.spp() >= 1; }));
+  ASSERT_TRUE(session.takeShownDesc());
+  const SceneDesc second = smallScene("assets/scenes/test/glow-box.json");
+  const uint64_t openId = session.open(second);
+  ASSERT_TRUE(gate.waitForBuilds(2));
+  SceneDesc bad = second;
+  bad.volumes[0].has_generator = false;
+  bad.volumes[0].file = "missing-edit.vdb";
+  const uint64_t editId = session.edit(bad);
+  gate.release();
+  // In order: the open, then the failed edit, whose fields are the opened scene's, not the first's
+  // (also when the edit fails before the worker has taken the opened scene, an interleaving this
+  // test cannot force).
+  const auto shown = takeShownUntil(session, [](const RenderSession::ShownDesc& s) { return !s.opened; });
+  ASSERT_EQ(shown.size(), 2u);
+  EXPECT_TRUE(shown[0].opened);
+  EXPECT_EQ(shown[0].request, openId);
+  EXPECT_FALSE(shown[1].opened);
+  EXPECT_EQ(shown[1].request, editId);
+  EXPECT_EQ(shown[1].desc.path, second.path);
+  EXPECT_TRUE(shown[1].desc.volumes[0].has_generator);
+  EXPECT_TRUE(waitFor(session, [&](const Frame& f) { return !f.preview && f.scene->path == second.path && f.film.spp() >= 2; }));
 }
 
 TEST(RenderSession, SceneDiffSeparatesLiveEditsFromRebuilds) {

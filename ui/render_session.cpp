@@ -90,7 +90,10 @@ std::vector<std::string> RenderSession::takeMessages() {
 
 std::optional<RenderSession::ShownDesc> RenderSession::takeShownDesc() {
   std::lock_guard<std::mutex> lock(mutex_);
-  return std::exchange(shownDescUpdate_, std::nullopt);
+  if (shownDescUpdates_.empty()) return std::nullopt;
+  ShownDesc oldest = std::move(shownDescUpdates_.front());
+  shownDescUpdates_.pop_front();
+  return oldest;
 }
 
 void RenderSession::message(const std::string& text) {
@@ -150,7 +153,7 @@ void RenderSession::loaderLoop() {
         builtScene_ = scene;
         builtRequest_ = request.request;
         if (isOpen) {
-          shownDescUpdate_ = ShownDesc{request.desc, request.request, true};
+          shownDescUpdates_.push_back(ShownDesc{request.desc, request.request, true});
           // An open replaces what the UI showed before it; edits made while it built are newer
           // requests on top of it (edit() sent them after this open) and stay the target.
           if (!target_ || target_->request < request.request) target_ = Target{request.desc, request.request};
@@ -158,14 +161,16 @@ void RenderSession::loaderLoop() {
         cancelPass_ = true;
         workerWake_.notify_one();
       } else {
-        messages_.push_back(error + (shownDesc_ ? " (still showing the last good scene)" : ""));
+        // The last good scene: a finished build the worker has not taken yet, else what it renders.
+        const std::shared_ptr<const SceneDesc> lastGood = builtScene_ ? std::make_shared<const SceneDesc>(builtScene_->desc()) : shownDesc_;
+        messages_.push_back(error + (lastGood ? " (still showing the last good scene)" : ""));
         workerWake_.notify_one();  // rendering resumes on the last good scene
         // The UI's fields go back to what is rendering, unless a newer request is queued.
         if (!buildRequest_) {
-          if (shownDesc_) {
-            shownDescUpdate_ = ShownDesc{*shownDesc_, request.request, false};
-            target_ = Target{*shownDesc_, request.request};
-            lastRequested_ = *shownDesc_;
+          if (lastGood) {
+            shownDescUpdates_.push_back(ShownDesc{*lastGood, request.request, false});
+            target_ = Target{*lastGood, request.request};
+            lastRequested_ = *lastGood;
           } else {
             lastRequested_.reset();
           }

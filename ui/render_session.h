@@ -71,7 +71,7 @@ class RenderSession {
   std::vector<std::string> takeMessages();
   // After an open succeeds, the description it opened (`opened`); after a failed build, the last
   // good one, so the UI's fields return to what is rendering. `request` is the open's or the failed
-  // build's request id. Each is returned once. An open that a newer open replaced before it finished
+  // build's request id. Each is returned once, oldest first. An open that a newer open replaced before it finished
   // is never shown and reports nothing; edits made while an open builds apply to the opened scene.
   struct ShownDesc {
     SceneDesc desc;
@@ -84,7 +84,7 @@ class RenderSession {
   // already false then, but a scene did load.
   bool openPending() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return shownDescUpdate_.has_value();
+    return !shownDescUpdates_.empty();
   }
 
  private:
@@ -121,7 +121,7 @@ class RenderSession {
 
   std::shared_ptr<const Frame> latest_;
   std::vector<std::string> messages_;
-  std::optional<ShownDesc> shownDescUpdate_;
+  std::deque<ShownDesc> shownDescUpdates_;  // oldest first: a failed edit never hides an open before it
 
   std::function<void()> notify_;
   std::function<void(const SceneDesc&)> buildHook_;

@@ -81,6 +81,13 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     import.up = options_.upAxis == "z" ? UpAxis::Z : options_.upAxis == "y" ? UpAxis::Y : UpAxis::Auto;
     SceneDesc desc = loadSceneOrVdb(path, settings, preset, import, &imported);
     const bool vdb = isVdbPath(path);
+    // Opening over an open still loading keeps the document from before the first: it still renders.
+    if (!pendingOpen_) {
+      beforeOpen_.reset();
+      if (haveScene_)
+        beforeOpen_ = DocumentState{scenePath_, documentPath_, scenePreset_, importSummary_, sceneSettings_, sceneTime_, untitled_, dirty_,
+                                    display_, history_, frames_};
+    }
     scenePath_ = path;
     documentPath_ = desc.path;
     untitled_ = vdb;
@@ -304,17 +311,18 @@ void Viewer::applyDisplay() {
 
 void Viewer::pollSession() {
   for (const auto& m : session_.takeMessages()) report(m);
-  if (auto shown = session_.takeShownDesc()) {
+  while (auto shown = session_.takeShownDesc()) {
     if (shown->opened) {
       // The open finished. The fields already hold its scene and any edits made while it loaded
       // (they went to the session after the open, which applies them on top): keep them.
-      if (shown->request == pendingOpen_) fileScene_ = openingScene_, pendingOpen_ = 0;
+      if (shown->request == pendingOpen_) fileScene_ = openingScene_, pendingOpen_ = 0, beforeOpen_.reset();
     } else {
       // A failed build: the fields go back to the last good scene, which is what renders.
       const std::string path = edited_.path;
       edited_ = shown->desc;
       if (pendingOpen_ && shown->request >= pendingOpen_) {
-        fileScene_ = shown->desc, pendingOpen_ = 0;  // the open (or an edit made while it loaded) failed
+        pendingOpen_ = 0;  // the open (or an edit made while it loaded) failed
+        restoreDocumentBeforeOpen();
       } else if (!path.empty()) {
         edited_.path = path;
       }
@@ -357,6 +365,32 @@ void Viewer::pollSession() {
       report("auto exposure: " + std::to_string(display_.exposure).substr(0, 5) + " stops");
     }
   }
+}
+
+void Viewer::restoreDocumentBeforeOpen() {
+  if (!beforeOpen_) {
+    fileScene_ = edited_;
+    return;
+  }
+  DocumentState& d = *beforeOpen_;
+  scenePath_ = d.scenePath;
+  documentPath_ = d.documentPath;
+  scenePreset_ = d.scenePreset;
+  importSummary_ = d.importSummary;
+  sceneSettings_ = d.sceneSettings;
+  sceneTime_ = d.sceneTime;
+  untitled_ = d.untitled;
+  dirty_ = d.dirty;
+  display_ = d.display;
+  history_ = d.history;
+  frames_ = d.frames;
+  beforeOpen_.reset();
+  autoExposurePending_ = false;
+  openLatencyPending_ = false;
+  edited_.display = display_;
+  applyDisplay();
+  updateTitle();
+  report("the document is still " + (documentPath_.empty() ? scenePath_ : documentPath_));
 }
 
 void Viewer::pollSceneFile() {

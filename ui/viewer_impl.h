@@ -168,6 +168,19 @@ class Viewer {
   std::string importSummary_;
   std::string title_;
   std::vector<std::string> droppedPaths_;
+  // The document before the open in flight, restored if that open fails to build: the title, Save
+  // and the file watcher keep naming the scene that still renders, never the file that failed.
+  struct DocumentState {
+    std::string scenePath, documentPath, scenePreset, importSummary;
+    std::vector<std::string> sceneSettings;
+    std::filesystem::file_time_type sceneTime{};
+    bool untitled = false, dirty = false;
+    DisplaySettings display;
+    EditHistory history;
+    FrameRange frames;
+  };
+  std::optional<DocumentState> beforeOpen_;
+  void restoreDocumentBeforeOpen();
 
   // Dialogs.
   std::deque<std::pair<std::string, ViewerClock::time_point>> messages_;
