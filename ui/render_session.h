@@ -71,8 +71,9 @@ class RenderSession {
   std::vector<std::string> takeMessages();
   // After an open succeeds, the description it opened (`opened`); after a failed build, the last
   // good one, so the UI's fields return to what is rendering. `request` is the open's or the failed
-  // build's request id. Each is returned once, oldest first. An open that a newer open replaced before it finished
-  // is never shown and reports nothing; edits made while an open builds apply to the opened scene.
+  // build's request id. Each is returned once, oldest first. An open that a newer open replaced
+  // before it finished is never shown and reports nothing; edits made while an open builds apply
+  // to the opened scene.
   struct ShownDesc {
     SceneDesc desc;
     uint64_t request = 0;

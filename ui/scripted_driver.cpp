@@ -123,7 +123,8 @@ void ScriptedDriver::step(Viewer& v) {
       v.history_.endGroup();
     }
     editsDone_ = true;
-    std::printf("scripted: %zu edits made %s %s\n", o.editsAfterStart.size(), loading ? "while loading" : "after loading", o.dropPath.c_str());
+    std::printf("scripted: %zu edits made %s %s\n", o.editsAfterStart.size(), loading ? "while loading" : "after loading",
+                o.dropPath.c_str());
     std::fflush(stdout);
     return;
   }

@@ -1,7 +1,8 @@
 // Scripted runs of the viewer, for tests and batch use: --screenshot/--after-spp, --figure,
 // --measure-latency, --inspect, --edit, --undo/--redo, --save-as, --snapshot-compare,
-// --frame-steps, --drop/--edit-while-loading and --quit. Each step waits for the image it needs, so a run does the same thing on
-// an idle or a busy machine. It drives the Viewer through the same calls the keys and menus make.
+// --frame-steps, --drop/--edit-while-loading and --quit. Each step waits for the image it needs, so a
+// run does the same thing on an idle or a busy machine. It drives the Viewer through the same calls
+// the keys and menus make.
 #pragma once
 
 #include <chrono>
