@@ -152,6 +152,8 @@ void RenderSession::loaderLoop() {
       } else if (scene) {
         builtScene_ = scene;
         builtRequest_ = request.request;
+        newestBuilt_ = std::make_shared<const SceneDesc>(scene->desc());
+        newestBuiltRequest_ = request.request;
         if (isOpen) {
           shownDescUpdates_.push_back(ShownDesc{request.desc, request.request, true});
           // An open replaces what the UI showed before it; edits made while it built are newer
@@ -161,8 +163,9 @@ void RenderSession::loaderLoop() {
         cancelPass_ = true;
         workerWake_.notify_one();
       } else {
-        // The last good scene: a finished build the worker has not taken yet, else what it renders.
-        const std::shared_ptr<const SceneDesc> lastGood = builtScene_ ? std::make_shared<const SceneDesc>(builtScene_->desc()) : shownDesc_;
+        // The last good scene: the newest build when the worker has not shown it yet (taken or not),
+        // else what the worker renders, with the live edits it has applied since.
+        const std::shared_ptr<const SceneDesc> lastGood = newestBuilt_ && newestBuiltRequest_ > shownDescRequest_ ? newestBuilt_ : shownDesc_;
         messages_.push_back(error + (lastGood ? " (still showing the last good scene)" : ""));
         workerWake_.notify_one();  // rendering resumes on the last good scene
         // The UI's fields go back to what is rendering, unless a newer request is queued.
@@ -279,6 +282,7 @@ void RenderSession::workerLoop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       shownDesc_ = std::make_shared<const SceneDesc>(scene->desc());
+      shownDescRequest_ = shownRequest;
       shownProbes_ = scene->probes();
     }
 

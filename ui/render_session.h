@@ -118,6 +118,9 @@ class RenderSession {
   std::optional<SceneDesc> lastRequested_;  // structure of the newest open or edit
   std::atomic<bool> loading_{false};
   std::shared_ptr<const SceneDesc> shownDesc_;  // desc of the scene the worker renders
+  uint64_t shownDescRequest_ = 0;                // the newest request shownDesc_ reflects
+  std::shared_ptr<const SceneDesc> newestBuilt_;  // the newest successful build, shown or about to be
+  uint64_t newestBuiltRequest_ = 0;
   std::shared_ptr<const ProbeSet> shownProbes_;  // its probes: they serve a rebuilt scene until it learns its own
 
   std::shared_ptr<const Frame> latest_;
