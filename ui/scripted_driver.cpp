@@ -90,6 +90,15 @@ void ScriptedDriver::measureLatency(Viewer& v) {
   measureNext_ = Clock::now() + std::chrono::milliseconds(400);
 }
 
+void ScriptedDriver::applyEdits(Viewer& v) {
+  // Each edit a separate undo step, as separate typed values would be.
+  for (const auto& e : v.options_.editsAfterStart) {
+    v.applySettingEdit(e);
+    v.history_.endGroup();
+  }
+  editsDone_ = true;
+}
+
 void ScriptedDriver::step(Viewer& v) {
   const ViewerOptions& o = v.options_;
   if (v.compare_) {
@@ -118,11 +127,7 @@ void ScriptedDriver::step(Viewer& v) {
   if (o.editWhileLoading && dropped_ && !editsDone_ && v.droppedPaths_.empty()) {
     // The dropped file has started to open (pollDrops ran): edit it while it loads.
     const bool loading = v.pendingOpen_ != 0;
-    for (const auto& e : o.editsAfterStart) {
-      v.applySettingEdit(e);
-      v.history_.endGroup();
-    }
-    editsDone_ = true;
+    applyEdits(v);
     std::printf("scripted: %zu edits made %s %s\n", o.editsAfterStart.size(), loading ? "while loading" : "after loading",
                 o.dropPath.c_str());
     std::fflush(stdout);
@@ -139,12 +144,7 @@ void ScriptedDriver::step(Viewer& v) {
     return;
   }
   if (!editsDone_) {
-    // Each edit a separate undo step, as separate typed values would be.
-    for (const auto& e : o.editsAfterStart) {
-      v.applySettingEdit(e);
-      v.history_.endGroup();
-    }
-    editsDone_ = true;
+    applyEdits(v);
     if (!o.editsAfterStart.empty()) return;  // let the edits reach the renderer first
   }
   if (!historyDone_) {

@@ -25,6 +25,7 @@ class ScriptedDriver {
 
  private:
   bool waitingForFullFrame(Viewer& v);
+  void applyEdits(Viewer& v);  // the --edit edits, once
   void measureLatency(Viewer& v);
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   bool dropped_ = false;
