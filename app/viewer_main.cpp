@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(2);
   app.add_option("--edit", o.editsAfterStart, "Apply a key=value edit once the first image is shown (as if typed in the panel)");
+  app.add_flag("--reset-camera", o.resetCamera, "Scripted: press Reset camera (R) after the --edit edits");
   app.add_option("--undo", o.undoSteps, "Scripted: undo this many edits after the --edit edits")->check(CLI::NonNegativeNumber);
   app.add_option("--redo", o.redoSteps, "Scripted: then redo this many")->check(CLI::NonNegativeNumber);
   app.add_option("--save-as", o.saveAsPath, "Scripted: then save the scene (with every edit) to this JSON file");

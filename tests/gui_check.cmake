@@ -203,6 +203,18 @@ elseif(MODE STREQUAL "open_vdb")
   if(NOT seed EQUAL 7 OR NOT exposure EQUAL 1.25 OR NOT unsaved STREQUAL "yes")
     message(FATAL_ERROR "edits made while the dropped file loaded were lost: seed ${seed}, exposure ${exposure}, unsaved edits ${unsaved}")
   endif()
+  # Reset camera pressed while it loads goes to the dropped file's camera, not the old scene's.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/cloud.vdb --hold-builds 1000
+              --edit-while-loading --reset-camera --screenshot ${OUT}/dropped-reset.png --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "scripted: 0 edits and a camera reset made while loading")
+  metadata(${OUT}/dropped.png settings settings)
+  string(JSON opened_camera GET "${settings}" camera)
+  metadata(${OUT}/dropped-reset.png settings settings)
+  string(JSON reset_camera GET "${settings}" camera)
+  string(JSON same EQUAL "${opened_camera}" "${reset_camera}")
+  if(NOT same)
+    message(FATAL_ERROR "Reset camera during the load gave ${reset_camera}, not the dropped file's ${opened_camera}")
+  endif()
   # A dropped scene whose VDB is missing fails to build: the document stays the scene that still
   # renders, so Save can never write it over the file that failed.
   get_filename_component(scenes ${SCENE} DIRECTORY)

@@ -29,7 +29,9 @@ void ScriptedDriver::editMeasured(double ms) {
 }
 
 bool ScriptedDriver::waitingForFullFrame(Viewer& v) {
-  const bool fullFrame = v.frame_ && !v.frame_->preview && v.frame_->film.spp() > 0 && !v.session_.loading() && !v.pendingOpen_;
+  // A frame of the scene opened last: the session publishes an open's scene before its first image.
+  const bool fullFrame = v.frame_ && !v.frame_->preview && v.frame_->film.spp() > 0 && !v.session_.loading() && !v.pendingOpen_ &&
+                         v.frame_->request >= v.openedRequest_;
   if (fullFrame) return false;
   // A scripted run whose scene never loads must not wait forever.
   // (A build that finished since the UI last polled the session is a loaded scene, not a failure.)
@@ -96,6 +98,10 @@ void ScriptedDriver::applyEdits(Viewer& v) {
     v.applySettingEdit(e);
     v.history_.endGroup();
   }
+  if (v.options_.resetCamera) {
+    v.resetCamera();
+    v.history_.endGroup();
+  }
   editsDone_ = true;
 }
 
@@ -128,8 +134,8 @@ void ScriptedDriver::step(Viewer& v) {
     // The dropped file has started to open (pollDrops ran): edit it while it loads.
     const bool loading = v.pendingOpen_ != 0;
     applyEdits(v);
-    std::printf("scripted: %zu edits made %s %s\n", o.editsAfterStart.size(), loading ? "while loading" : "after loading",
-                o.dropPath.c_str());
+    std::printf("scripted: %zu edits%s made %s %s\n", o.editsAfterStart.size(), o.resetCamera ? " and a camera reset" : "",
+                loading ? "while loading" : "after loading", o.dropPath.c_str());
     std::fflush(stdout);
     return;
   }

@@ -86,7 +86,7 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
       beforeOpen_.reset();
       if (haveScene_)
         beforeOpen_ = DocumentState{scenePath_, documentPath_, scenePreset_, importSummary_, sceneSettings_, sceneTime_, untitled_, dirty_,
-                                    display_, history_, frames_};
+                                    display_, history_, frames_, fileScene_};
     }
     scenePath_ = path;
     documentPath_ = desc.path;
@@ -110,7 +110,8 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     comparedSnapshot_ = 0;
     openStart_ = ViewerClock::now();
     openLatencyPending_ = true;
-    openingScene_ = desc;
+    // Reset camera goes to the opened file's camera from here on, even while the file loads.
+    fileScene_ = desc;
     pendingOpen_ = session_.open(desc);
     updateTitle();
   } catch (const std::exception& e) {
@@ -315,7 +316,7 @@ void Viewer::pollSession() {
     if (shown->opened) {
       // The open finished. The fields already hold its scene and any edits made while it loaded
       // (they went to the session after the open, which applies them on top): keep them.
-      if (shown->request == pendingOpen_) fileScene_ = openingScene_, pendingOpen_ = 0, beforeOpen_.reset();
+      if (shown->request == pendingOpen_) openedRequest_ = pendingOpen_, pendingOpen_ = 0, beforeOpen_.reset();
     } else {
       // A failed build: the fields go back to the last good scene, which is what renders.
       const std::string path = edited_.path;
@@ -337,7 +338,7 @@ void Viewer::pollSession() {
     outputDirty_ = true;
     if (!haveScene_ && latest->scene) edited_ = *latest->scene, fileScene_ = edited_, haveScene_ = true;
     const bool full = !latest->preview && latest->film.spp() > 0;
-    if (full && openLatencyPending_ && !pendingOpen_) {
+    if (full && openLatencyPending_ && !pendingOpen_ && latest->request >= openedRequest_) {
       openLatencyPending_ = false;
       openStartSeconds_ = secondsSince(openStart_);
       // The first open is timed from the launch too: what an artist waits for after `candela fire.vdb`.
@@ -357,7 +358,7 @@ void Viewer::pollSession() {
     // Auto exposure on open: from the first image with a few samples, so noise does not decide it.
     // Not over an exposure the artist set while the file loaded.
     if (autoExposurePending_ && display_.exposure != openedExposure_) autoExposurePending_ = false;
-    if (autoExposurePending_ && full && latest->film.spp() >= 4 && !pendingOpen_) {
+    if (autoExposurePending_ && full && latest->film.spp() >= 4 && !pendingOpen_ && latest->request >= openedRequest_) {
       autoExposurePending_ = false;
       display_.exposure = autoExposureStops(latest->film.meanImage());
       applyDisplay();
@@ -384,6 +385,7 @@ void Viewer::restoreDocumentBeforeOpen() {
   display_ = d.display;
   history_ = d.history;
   frames_ = d.frames;
+  fileScene_ = d.fileScene;
   beforeOpen_.reset();
   autoExposurePending_ = false;
   openLatencyPending_ = false;
@@ -429,6 +431,11 @@ float Viewer::imageAspect() const {
     return (canvas_.wipe() ? 1 : paneCount()) * static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
   if (frame_) return (comparedSnapshot_ && !canvas_.wipe() ? 2.0f : 1.0f) * static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
   return 0.0f;
+}
+
+void Viewer::resetCamera() {
+  edited_.camera = fileScene_.camera;
+  submitEdit();
 }
 
 void Viewer::frameVolume() {

@@ -36,6 +36,8 @@ struct ViewerOptions {
   // Scripted edit applied once the first full frame is shown (a --set style key=value), to test
   // bad edits in the app.
   std::vector<std::string> editsAfterStart;
+  // Then reset the camera (R), as an artist does after tumbling.
+  bool resetCamera = false;
   // Open the guide inspector on this pixel once the first image is shown (as a Ctrl+click would);
   // a scripted screenshot then waits for its chart.
   std::vector<int> inspectPixel;

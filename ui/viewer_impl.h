@@ -98,6 +98,7 @@ class Viewer {
   void pollSceneFile();
   void pollDrops();
   void frameVolume();
+  void resetCamera();  // the camera the document was opened with
   void handleCamera();
 
   // --- equal-time comparison (viewer.cpp, panels) ---
@@ -155,10 +156,11 @@ class Viewer {
   std::filesystem::file_time_type sceneTime_{};
   ViewerClock::time_point lastPoll_ = ViewerClock::now();
   uint64_t pendingOpen_ = 0;
+  // The last open that loaded: frames of older requests show the scene from before it.
+  uint64_t openedRequest_ = 0;
   bool haveScene_ = false;
   SceneDesc edited_;     // what the panels edit
   SceneDesc fileScene_;  // as opened (camera reset)
-  SceneDesc openingScene_;  // the file being opened (pendingOpen_): fileScene_ once it loads
   EditHistory history_;
   bool gestureActive_ = false;  // a drag or a widget edit in progress: its edits are one undo step
   ViewerClock::time_point lastWheel_;
@@ -178,6 +180,7 @@ class Viewer {
     DisplaySettings display;
     EditHistory history;
     FrameRange frames;
+    SceneDesc fileScene;
   };
   std::optional<DocumentState> beforeOpen_;
   void restoreDocumentBeforeOpen();

@@ -31,7 +31,7 @@ void Viewer::drawMenuBar() {
   }
   if (ImGui::BeginMenu("View")) {
     if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
-    if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) edited_.camera = fileScene_.camera, submitEdit();
+    if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) resetCamera();
     if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked()) && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
     if (ImGui::MenuItem("Snapshots", "Shift+K", showSnapshots_)) showSnapshots_ = !showSnapshots_;
     ImGui::Separator();
@@ -223,10 +223,7 @@ void Viewer::handleKeys() {
     return;
   }
   if (f && haveScene_) frameVolume();
-  if ((r || home) && haveScene_) {
-    edited_.camera = fileScene_.camera;
-    submitEdit();
-  }
+  if ((r || home) && haveScene_) resetCamera();
   if (l && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
   if (f12 || s) screenshot("");
   if (c) {
