@@ -5,10 +5,24 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 namespace candela {
+
+Vec2 pixelSamplePosition(uint64_t pixelKey, uint64_t sampleIndex) {
+  // 1 / g and 1 / g^2, g = 1.32471795724... (x^3 = x + 1): the two-dimensional golden ratio, whose
+  // additive recurrence has the lowest discrepancy known for every prefix (Roberts 2018).
+  constexpr double kStepX = 0.75487766624669276, kStepY = 0.56984029099805327;
+  Rng start(hashCombine(pixelKey, 0x5032b1d5e4a3c6f7ULL), pixelKey);
+  const double n = static_cast<double>(sampleIndex);  // exact below 2^53: any sample count the limits allow
+  const double x = start.uniform() + n * kStepX, y = start.uniform() + n * kStepY;
+  // Below 1 after rounding to float as well: a position never lands on the next pixel's edge.
+  constexpr float kBelowOne = 0x1.fffffep-1f;
+  return Vec2(std::min(static_cast<float>(x - std::floor(x)), kBelowOne), std::min(static_cast<float>(y - std::floor(y)), kBelowOne));
+}
 
 ProgressiveRenderer::ProgressiveRenderer(std::shared_ptr<const Scene> scene, RenderOptions options)
     : scene_(std::move(scene)), options_(options) {}
@@ -50,9 +64,10 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
         if (cachedGuides && x + 1 < x1) __builtin_prefetch(cameraGuides_.at(x + 1, y));
         const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
         for (int s = 0; s < spp; ++s) {
-          Rng rng(hashCombine(pixelKey, static_cast<uint64_t>(firstSample + s)), pixelKey);
-          const float jx = rng.uniform(), jy = rng.uniform();
-          const Ray ray = camera.generate(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
+          const uint64_t sampleIndex = static_cast<uint64_t>(firstSample + s);
+          Rng rng(hashCombine(pixelKey, sampleIndex), pixelKey);
+          const Vec2 position = pixelSamplePosition(pixelKey, sampleIndex);
+          const Ray ray = camera.generate(static_cast<float>(x) + position.x, static_cast<float>(y) + position.y);
           PathTracer::CameraVertexRecord record;
           const Rgb value = tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng, measure ? &record : nullptr);
           pass.addSample(x, y, value);

@@ -14,7 +14,12 @@
 // probe-guided vertex is drawn on one camera segment in ten (one-sample MIS), and on the other nine
 // the tracked vertex takes that same next-event estimate. Its detectable bias moves with the random
 // stream, 1.6-2.4% (its variance per sample over seeds 1-12 at 48x27: 0.09 to 23), as auto's does
-// when it chooses emission.
+// when it chooses emission. Equi-angular sampling removes the singularity from the camera ray's
+// vertex only (guided_segments = 1): the vertices after it take the same next-event estimate, so
+// its detectable bias moves with the stream too, less: 1.7% with random sub-pixel positions, 2.3%
+// with the stratified ones, which draw different random numbers (its variance per sample over seeds
+// 1-6 at 96x54, 512 spp: 11-45 before, 9-50 after). It is held to 4%, the others to 6%.
+
 #include "stability.h"
 #include "test_support.h"
 
@@ -53,8 +58,10 @@ TEST_P(Stability, EveryPresetAgreesWithConventionalAndTheFilmStaysFinite) {
     EXPECT_TRUE(r.agrees) << c.name << " " << preset << ": |z| " << r.maxAbsZ << " > " << r.threshold;
     // auto may choose emission there too; full keeps the tracked vertex on nine segments in ten.
     const std::string p = preset;
-    const bool infiniteVariance = c.name == "point-light-inside" && (p == "emission" || p == "full" || p == "auto");
-    EXPECT_LT(r.detectableBias, infiniteVariance ? 0.06 : 0.02) << c.name << " " << preset << ": the test lacks the power to catch a 2% bias";
+    const bool pointLight = c.name == "point-light-inside";
+    const bool infiniteVariance = pointLight && (p == "emission" || p == "full" || p == "auto");
+    const double power = infiniteVariance ? 0.06 : pointLight && p == "equiangular" ? 0.04 : 0.02;
+    EXPECT_LT(r.detectableBias, power) << c.name << " " << preset << ": the test lacks the power to catch a " << 100.0 * power << "% bias";
     EXPECT_EQ(r.rejected, 0u) << c.name << " " << preset;
   }
   if (c.name == "invalid-voxels") {
