@@ -12,16 +12,10 @@
 
 namespace candela {
 
-Vec2 pixelSamplePosition(uint64_t pixelKey, uint64_t sampleIndex) {
-  // 1 / g and 1 / g^2, g = 1.32471795724... (x^3 = x + 1): the two-dimensional golden ratio, whose
-  // additive recurrence has the lowest discrepancy known for every prefix (Roberts 2018).
-  constexpr double kStepX = 0.75487766624669276, kStepY = 0.56984029099805327;
+PixelSamplePositions::PixelSamplePositions(uint64_t pixelKey) {
   Rng start(hashCombine(pixelKey, 0x5032b1d5e4a3c6f7ULL), pixelKey);
-  const double n = static_cast<double>(sampleIndex);  // exact below 2^53: any sample count the limits allow
-  const double x = start.uniform() + n * kStepX, y = start.uniform() + n * kStepY;
-  // Below 1 after rounding to float as well: a position never lands on the next pixel's edge.
-  constexpr float kBelowOne = 0x1.fffffep-1f;
-  return Vec2(std::min(static_cast<float>(x - std::floor(x)), kBelowOne), std::min(static_cast<float>(y - std::floor(y)), kBelowOne));
+  startX_ = start.uniform();
+  startY_ = start.uniform();
 }
 
 ProgressiveRenderer::ProgressiveRenderer(std::shared_ptr<const Scene> scene, RenderOptions options)
@@ -63,10 +57,11 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
         // The next pixel's guide entry (half a cache line) arrives while this pixel's samples run.
         if (cachedGuides && x + 1 < x1) __builtin_prefetch(cameraGuides_.at(x + 1, y));
         const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
+        const PixelSamplePositions positions(pixelKey);
         for (int s = 0; s < spp; ++s) {
           const uint64_t sampleIndex = static_cast<uint64_t>(firstSample + s);
           Rng rng(hashCombine(pixelKey, sampleIndex), pixelKey);
-          const Vec2 position = pixelSamplePosition(pixelKey, sampleIndex);
+          const Vec2 position = positions(sampleIndex);
           const Ray ray = camera.generate(static_cast<float>(x) + position.x, static_cast<float>(y) + position.y);
           PathTracer::CameraVertexRecord record;
           const Rgb value = tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng, measure ? &record : nullptr);

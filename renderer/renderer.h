@@ -12,28 +12,49 @@
 #include "integrator.h"
 #include "scene.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <functional>
 #include <vector>
 
 namespace candela {
 
-// Where camera sample `sampleIndex` of a pixel lies inside it, in [0, 1)^2 (docs/method.md s.4c):
-// Roberts' R2 sequence, the additive recurrence n (1 / g, 1 / g^2) modulo 1 with g the plastic
-// number, from a random start per pixel (hashed from `pixelKey`: the seed and the pixel). Each
-// position is uniform over the pixel, so every sample's expectation is the pixel's value; the first
-// n positions of a pixel cover it about evenly for every n, which takes most of the footprint's
-// share of the variance off a pixel's mean (at 64 spp 13% less MSE on torch-in-mist and 3% on
-// fire, the same relMSE; docs/performance.md, "Stratified sub-pixel positions"). A pixel's samples
-// are then not independent of each other: their shared start is why a pixel's sample variance
-// overstates its mean's error a little, and s.4b says why auto's joined images stay unbiased.
-Vec2 pixelSamplePosition(uint64_t pixelKey, uint64_t sampleIndex);
+// Where a pixel's camera samples lie inside it, in [0, 1)^2 (docs/method.md s.4c): Roberts' R2
+// sequence, the additive recurrence n (1 / g, 1 / g^2) modulo 1 with g the plastic number, from a
+// random start per pixel (hashed from `pixelKey`: the seed and the pixel). Each position is uniform
+// over the pixel, so every sample's expectation is the pixel's value; the first n positions of a
+// pixel cover it about evenly for every n, which takes most of the footprint's share of the
+// variance off a pixel's mean (at 64 spp 13% less MSE on torch-in-mist and 3% on fire, the same
+// relMSE; docs/performance.md, "Stratified sub-pixel positions"). A pixel's samples are then not
+// independent of each other: their shared start is why a pixel's sample variance overstates its
+// mean's error a little, and s.4b says why auto's joined images stay unbiased.
+// Built once per pixel: the start's hash and random numbers are the pixel's, not each sample's.
+class PixelSamplePositions {
+ public:
+  explicit PixelSamplePositions(uint64_t pixelKey);
+
+  // The position of the pixel's sample `sampleIndex`.
+  Vec2 operator()(uint64_t sampleIndex) const {
+    // 1 / g and 1 / g^2, g = 1.32471795724... (x^3 = x + 1): the two-dimensional golden ratio,
+    // whose additive recurrence has the lowest discrepancy known for every prefix (Roberts 2018).
+    constexpr double kStepX = 0.75487766624669276, kStepY = 0.56984029099805327;
+    const double n = static_cast<double>(sampleIndex);  // exact below 2^53: any sample count the limits allow
+    const double x = startX_ + n * kStepX, y = startY_ + n * kStepY;
+    // Below 1 after rounding to float as well: a position never lands on the next pixel's edge.
+    constexpr float kBelowOne = 0x1.fffffep-1f;
+    return Vec2(std::min(static_cast<float>(x - std::floor(x)), kBelowOne), std::min(static_cast<float>(y - std::floor(y)), kBelowOne));
+  }
+
+ private:
+  double startX_, startY_;
+};
 
 struct RenderOptions {
   int threads = 0;     // 0: all hardware threads
   int tileSize = 32;
   // The sample index of a film's first sample: a film's n-th sample draws stream firstSample + n and
-  // lies at pixelSamplePosition(pixel, firstSample + n). Auto's pilot renders its candidates on
+  // lies at PixelSamplePositions(pixel)(firstSample + n). Auto's pilot renders its candidates on
   // disjoint index ranges, so that their images can join the final one (auto_strategy.h) as
   // samples of one sequence per pixel, each with fresh random numbers.
   int firstSample = 0;

@@ -39,7 +39,7 @@ TEST(PixelSamplePositions, AreUniformOverThePixelAtEverySampleIndex) {
   for (uint64_t index : {0ull, 1ull, 37ull, 1000ull, 16777215ull}) {
     std::vector<int> counts(kBins * kBins, 0);
     for (int p = 0; p < kPixels; ++p) {
-      const Vec2 u = pixelSamplePosition(hashCombine(7, static_cast<uint64_t>(p)), index);
+      const Vec2 u = PixelSamplePositions(hashCombine(7, static_cast<uint64_t>(p)))(index);
       ASSERT_TRUE(u.x >= 0.0f && u.x < 1.0f && u.y >= 0.0f && u.y < 1.0f) << u.x << " " << u.y;
       ++counts[static_cast<size_t>(static_cast<int>(u.y * kBins) * kBins + static_cast<int>(u.x * kBins))];
     }
@@ -60,8 +60,9 @@ TEST(PixelSamplePositions, EveryPrefixCoversThePixelEvenly) {
     int worst = 0;
     for (int p = 0; p < 1000; ++p) {
       int quadrants[4] = {0, 0, 0, 0};
+      const PixelSamplePositions positions(hashCombine(11, static_cast<uint64_t>(p)));
       for (int i = 0; i < n; ++i) {
-        const Vec2 u = pixelSamplePosition(hashCombine(11, static_cast<uint64_t>(p)), static_cast<uint64_t>(i));
+        const Vec2 u = positions(static_cast<uint64_t>(i));
         ++quadrants[(u.x < 0.5f ? 0 : 1) + (u.y < 0.5f ? 0 : 2)];
       }
       for (int q : quadrants) {
