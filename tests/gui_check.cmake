@@ -231,6 +231,31 @@ elseif(MODE STREQUAL "open_vdb")
   if(document MATCHES "broken-drop" OR scene MATCHES "broken-drop")
     message(FATAL_ERROR "after a failed drop the document is the file that failed: ${document}, ${scene}")
   endif()
+  # The same drop edited while it loads: the edits were edits of the file that failed, so they go
+  # with it and the viewer says so; the look is the scene's that still renders, and the run does not
+  # hang waiting for an image of the dropped edits (it did, with the edit-latency timer left running).
+  execute_process(COMMAND ${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/broken-drop.json --hold-builds 1000
+                          --edit-while-loading --edit render.seed=7 --edit display.exposure=1.25
+                          --screenshot ${OUT}/dropped-broken-edited.png --after-spp 4 --quit
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+  message("${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "a failed drop edited while it loaded: exit ${rc} (a hang times out after 60 s)")
+  endif()
+  expect_contains("${out}${err}" "scripted: 2 edits made while loading")
+  expect_contains("${out}${err}" "the edits made while broken-drop.json loaded went with it")
+  metadata(${OUT}/dropped-broken.png display display)
+  string(JSON kept_exposure GET "${display}" exposure)
+  metadata(${OUT}/dropped-broken.png settings settings)
+  string(JSON kept_seed GET "${settings}" render seed)
+  metadata(${OUT}/dropped-broken-edited.png display display)
+  string(JSON exposure GET "${display}" exposure)
+  metadata(${OUT}/dropped-broken-edited.png settings settings)
+  string(JSON seed GET "${settings}" render seed)
+  metadata(${OUT}/dropped-broken-edited.png document document)
+  if(document MATCHES "broken-drop" OR NOT exposure EQUAL kept_exposure OR NOT seed EQUAL kept_seed)
+    message(FATAL_ERROR "after a failed, edited drop: document ${document}, exposure ${exposure} (expected ${kept_exposure}), seed ${seed} (expected ${kept_seed})")
+  endif()
 elseif(MODE STREQUAL "save")
   # Edit, save as, reopen: the reopened scene renders the same samples as the edited one.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[160,90] --edit volumes.1.g=0.3

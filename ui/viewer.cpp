@@ -318,7 +318,9 @@ void Viewer::pollSession() {
       // (they went to the session after the open, which applies them on top): keep them.
       if (shown->request == pendingOpen_) openedRequest_ = pendingOpen_, pendingOpen_ = 0, beforeOpen_.reset();
     } else {
-      // A failed build: the fields go back to the last good scene, which is what renders.
+      // A failed build: the fields go back to the last good scene, which is what renders. The
+      // edits made on top of what failed went with it, so no image will answer the one being timed.
+      latencyRequest_ = 0;
       const std::string path = edited_.path;
       edited_ = shown->desc;
       if (pendingOpen_ && shown->request >= pendingOpen_) {
@@ -374,6 +376,10 @@ void Viewer::restoreDocumentBeforeOpen() {
     return;
   }
   DocumentState& d = *beforeOpen_;
+  // Edits made while the file loaded were edits of that file: they go with it, and the artist is
+  // told so rather than left to find the look changed back.
+  const std::string failed = fs::path(scenePath_).filename().string();
+  const bool editedWhileLoading = history_.canUndo();
   scenePath_ = d.scenePath;
   documentPath_ = d.documentPath;
   scenePreset_ = d.scenePreset;
@@ -392,7 +398,8 @@ void Viewer::restoreDocumentBeforeOpen() {
   edited_.display = display_;
   applyDisplay();
   updateTitle();
-  report("the document is still " + (documentPath_.empty() ? scenePath_ : documentPath_));
+  report("the document is still " + (documentPath_.empty() ? scenePath_ : documentPath_) +
+         (editedWhileLoading ? "; the edits made while " + failed + " loaded went with it" : ""));
 }
 
 void Viewer::pollSceneFile() {
