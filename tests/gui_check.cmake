@@ -324,6 +324,31 @@ elseif(MODE STREQUAL "timeline")
     endif()
   endforeach()
   run_checked(${COMPARE} ${OUT}/timeline.png ${OUT}/timeline.exr ${OUT}/cli/fire.0003.exr 4)
+  # A sequence with a broken frame (a sim frame that failed to write), played: the viewer reports
+  # the frame once and pauses on the frame before it, where it kept retrying it on every image
+  # (hundreds of the same error a second, the timeline stuck).
+  file(MAKE_DIRECTORY ${OUT}/broken-seq)
+  foreach(f 1 3)
+    file(COPY_FILE ${OUT}/seq/fire.000${f}.vdb ${OUT}/broken-seq/fire.000${f}.vdb)
+  endforeach()
+  file(WRITE ${OUT}/broken-seq/fire.0002.vdb "not a VDB: the simulation stopped writing here")
+  execute_process(COMMAND ${XVFB} ${VIEWER} ${OUT}/broken-seq/fire.0001.vdb --set camera.resolution=[160,90] --play
+                          --screenshot ${OUT}/broken-seq.png --after 3 --quit
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+  message("${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "playing a sequence with a broken frame: exit ${rc}")
+  endif()
+  expect_contains("${out}${err}" "playback paused: frame 2 could not be loaded (still on frame 1)")
+  string(REGEX MATCHALL "fire.0002.vdb: volumes" reports "${out}${err}")
+  list(LENGTH reports count)
+  if(count GREATER 2)
+    message(FATAL_ERROR "the broken frame was reported ${count} times: playback kept retrying it")
+  endif()
+  metadata(${OUT}/broken-seq.png frame frame)
+  if(NOT frame EQUAL 1)
+    message(FATAL_ERROR "after the broken frame the viewer shows frame ${frame}, expected 1")
+  endif()
 elseif(MODE STREQUAL "quit_prompt")
   # Unsaved edits: Ctrl+Q asks instead of quitting; D (discard) then quits.
   file(WRITE ${OUT}/drive.sh

@@ -140,6 +140,10 @@ void ScriptedDriver::step(Viewer& v) {
     return;
   }
   if (waitingForFullFrame(v)) return;
+  if (o.play && !playPressed_) {
+    v.playing_ = true;
+    playPressed_ = true;
+  }
   // A snapshot of the first image, compared with the live render once the edits below land.
   if (o.snapshotCompare && !snapshotDone_) {
     if (o.afterSpp > 0 && v.frame_->film.spp() < o.afterSpp) return;

@@ -1,6 +1,6 @@
 // Scripted runs of the viewer, for tests and batch use: --screenshot/--after-spp, --figure,
 // --measure-latency, --inspect, --edit, --undo/--redo, --save-as, --snapshot-compare,
-// --frame-steps, --drop/--edit-while-loading and --quit. Each step waits for the image it needs, so a
+// --frame-steps, --play, --drop/--edit-while-loading and --quit. Each step waits for the image it needs, so a
 // run does the same thing on an idle or a busy machine. It drives the Viewer through the same calls
 // the keys and menus make.
 #pragma once
@@ -33,7 +33,7 @@ class ScriptedDriver {
   int framesStepped_ = 0;
   bool frameRequested_ = false;
   std::vector<double> frameStepMs_;
-  bool inspectDone_ = false, inspectReported_ = false;
+  bool inspectDone_ = false, inspectReported_ = false, playPressed_ = false;
   int measureIndex_ = 0;
   std::chrono::steady_clock::time_point measureNext_, measureStart_;
   int measureFrames_ = 0;

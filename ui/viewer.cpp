@@ -329,6 +329,17 @@ void Viewer::pollSession() {
       } else if (!path.empty()) {
         edited_.path = path;
       }
+      if (frameLatencyPending_) {
+        // The frame stepped to failed to load (a missing or truncated file in the sequence): the
+        // timeline stays on the frame that renders, and playback pauses rather than retry the broken
+        // frame on every image.
+        frameLatencyPending_ = false;
+        if (playing_) {
+          playing_ = false;
+          report("playback paused: frame " + std::to_string(frameStepTo_) + " could not be loaded (still on frame " +
+                 std::to_string(edited_.render.frame) + ")");
+        }
+      }
     }
     haveScene_ = true;
   }

@@ -56,6 +56,8 @@ struct ViewerOptions {
   bool snapshotCompare = false;
   // Step the timeline forward this many frames, timing each step's first image.
   int frameSteps = 0;
+  // Press Play once the first image shows: each frame renders to the timeline's spp, then steps.
+  bool play = false;
 };
 
 // Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.

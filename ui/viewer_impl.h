@@ -228,7 +228,7 @@ class Viewer {
   bool playing_ = false;
   int playSpp_ = 16;
   float playSeconds_ = 0.0f;
-  uint64_t frameRequest_ = 0;
+  int frameStepTo_ = 0;  // the frame the last step asked for
   ViewerClock::time_point frameStepStart_;
   bool frameLatencyPending_ = false;
   double lastFrameStepMs_ = 0.0;

@@ -477,6 +477,7 @@ void Viewer::setFrame(int frame) {
   if (frame < frames_.first) frame = frames_.last;
   if (frame == edited_.render.frame) return;
   edited_.render.frame = frame;
+  frameStepTo_ = frame;
   frameStepStart_ = ViewerClock::now();
   frameLatencyPending_ = true;
   submitEdit("frame");
