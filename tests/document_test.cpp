@@ -54,6 +54,33 @@ TEST(EditHistory, AGestureIsOneStepAndAnUnchangedStateRecordsNothing) {
   EXPECT_EQ(*k.redo(), Json({{"a", 3}}));
 }
 
+// An edit whose scene cannot build (a truncated VDB typed into the file field) leaves the history
+// with the scene going back: undo after a later edit goes to the state before the failure, never
+// to the failed state, which would fail again.
+TEST(EditHistory, AFailedEditLeavesTheHistory) {
+  EditHistory h;
+  h.reset({{"file", "good.vdb"}});
+  h.record({{"file", "truncated.vdb"}});
+  h.revertCurrent({{"file", "good.vdb"}});  // the build failed: back to the good file
+  EXPECT_FALSE(h.canUndo());
+  EXPECT_FALSE(h.canRedo());
+  h.record({{"file", "good.vdb"}, {"g", 0.5}});
+  EXPECT_EQ(*h.undo(), Json({{"file", "good.vdb"}}));
+  EXPECT_FALSE(h.canUndo());
+  // An undo that lands on a state that fails (its file broke since): that state becomes the one
+  // that renders, and the steps around it stay.
+  EditHistory k;
+  k.reset({{"v", 0}});
+  k.record({{"v", 1}});
+  k.record({{"v", 2}});
+  ASSERT_TRUE(k.undo());
+  k.revertCurrent({{"v", 2}});
+  EXPECT_EQ(k.undoSteps(), 1u);
+  EXPECT_EQ(*k.redo(), Json({{"v", 2}}));
+  EXPECT_EQ(*k.undo(), Json({{"v", 2}}));
+  EXPECT_EQ(*k.undo(), Json({{"v", 0}}));
+}
+
 TEST(EditHistory, KeepsAtMostItsLimit) {
   EditHistory h(5);
   h.reset({{"v", 0}});

@@ -289,6 +289,22 @@ elseif(MODE STREQUAL "undo")
   if(NOT g MATCHES "^0\\.300" OR NOT sigma MATCHES "^0\\.100" OR NOT undo_steps EQUAL 1 OR NOT redo_steps EQUAL 1)
     message(FATAL_ERROR "undo/redo did not restore the expected state")
   endif()
+  # An edit whose scene cannot build (the file field pointed at a broken VDB): the scene and the
+  # fields go back to the file that renders, and the run does not wait for an image of the failed
+  # edit (it did, with the edit-latency timer left running). The failed state leaves the undo
+  # history too (EditHistory.AFailedEditLeavesTheHistory): here the step stays, holding the state
+  # that renders, since auto exposure and auto's decision changed it after the edit.
+  run_checked(${CLI} generate cloud --resolution 16 -o ${OUT}/cloud.vdb)
+  file(WRITE ${OUT}/broken.vdb "not a VDB")
+  run_checked(${XVFB} ${VIEWER} ${OUT}/cloud.vdb --set camera.resolution=[160,90] --edit volumes.0.file=${OUT}/broken.vdb
+              --screenshot ${OUT}/undo-failed.png --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "broken.vdb")
+  metadata(${OUT}/undo-failed.png undo_steps undo_steps)
+  metadata(${OUT}/undo-failed.png settings settings)
+  string(JSON file GET "${settings}" volumes 0 file)
+  if(NOT file MATCHES "cloud.vdb$" OR undo_steps GREATER 1)
+    message(FATAL_ERROR "after a failed edit: volume file ${file} (expected cloud.vdb), ${undo_steps} undo steps")
+  endif()
 elseif(MODE STREQUAL "snapshot")
   # A snapshot at 4 spp, then the exposure up 3 stops: the wipe shows the brighter live render left
   # of the divider and the snapshot, as it was seen, right of it.

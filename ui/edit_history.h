@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,6 +43,19 @@ class EditHistory {
     if (states_.size() > maxSteps_) {
       states_.erase(states_.begin());
       --current_;
+    }
+  }
+  // The current state could not be built, and the scene went back to `state`: the failed state
+  // leaves the history, so that undo and redo never replay it. Its step goes when the step before
+  // it is `state` (the usual case: the edit just made failed); otherwise it becomes `state`.
+  void revertCurrent(const nlohmann::json& state) {
+    if (states_.empty()) return reset(state);
+    group_.clear();
+    if (current_ > 0 && states_[current_ - 1] == state) {
+      states_.erase(states_.begin() + static_cast<std::ptrdiff_t>(current_));
+      --current_;
+    } else {
+      states_[current_] = state;
     }
   }
   // Ends the open group: the next edit is a new step even in the same group (the gesture ended).

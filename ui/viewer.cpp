@@ -326,8 +326,9 @@ void Viewer::pollSession() {
       if (pendingOpen_ && shown->request >= pendingOpen_) {
         pendingOpen_ = 0;  // the open (or an edit made while it loaded) failed
         restoreDocumentBeforeOpen();
-      } else if (!path.empty()) {
-        edited_.path = path;
+      } else {
+        if (!path.empty()) edited_.path = path;
+        history_.revertCurrent(lookState());  // undo never replays the edit that failed
       }
       if (frameLatencyPending_) {
         // The frame stepped to failed to load (a missing or truncated file in the sequence): the
