@@ -33,13 +33,20 @@ function(halves image left right levels)
   set(${levels} ${CMAKE_MATCH_3} PARENT_SCOPE)
 endfunction()
 
-function(run_checked)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 240)
+# Runs a command that must exit 0 within `seconds` (a hang fails on the limit); its output goes to
+# LAST_OUTPUT.
+function(run_within seconds)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT ${seconds})
   message("${out}${err}")
   if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "failed (${rc}): ${ARGN}")
+    message(FATAL_ERROR "failed (${rc}; the limit is ${seconds} s): ${ARGN}")
   endif()
   set(LAST_OUTPUT "${out}${err}" PARENT_SCOPE)
+endfunction()
+
+function(run_checked)
+  run_within(240 ${ARGN})
+  set(LAST_OUTPUT "${LAST_OUTPUT}" PARENT_SCOPE)
 endfunction()
 
 if(MODE STREQUAL "screenshot")
@@ -234,16 +241,11 @@ elseif(MODE STREQUAL "open_vdb")
   # The same drop edited while it loads: the edits were edits of the file that failed, so they go
   # with it and the viewer says so; the look is the scene's that still renders, and the run does not
   # hang waiting for an image of the dropped edits (it did, with the edit-latency timer left running).
-  execute_process(COMMAND ${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/broken-drop.json --hold-builds 1000
-                          --edit-while-loading --edit render.seed=7 --edit display.exposure=1.25
-                          --screenshot ${OUT}/dropped-broken-edited.png --after-spp 4 --quit
-                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
-  message("${out}${err}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "a failed drop edited while it loaded: exit ${rc} (a hang times out after 60 s)")
-  endif()
-  expect_contains("${out}${err}" "scripted: 2 edits made while loading")
-  expect_contains("${out}${err}" "the edits made while broken-drop.json loaded went with it")
+  run_within(60 ${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${OUT}/broken-drop.json --hold-builds 1000
+             --edit-while-loading --edit render.seed=7 --edit display.exposure=1.25
+             --screenshot ${OUT}/dropped-broken-edited.png --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "scripted: 2 edits made while loading")
+  expect_contains("${LAST_OUTPUT}" "the edits made while broken-drop.json loaded went with it")
   metadata(${OUT}/dropped-broken.png display display)
   string(JSON kept_exposure GET "${display}" exposure)
   metadata(${OUT}/dropped-broken.png settings settings)
@@ -348,15 +350,10 @@ elseif(MODE STREQUAL "timeline")
     file(COPY_FILE ${OUT}/seq/fire.000${f}.vdb ${OUT}/broken-seq/fire.000${f}.vdb)
   endforeach()
   file(WRITE ${OUT}/broken-seq/fire.0002.vdb "not a VDB: the simulation stopped writing here")
-  execute_process(COMMAND ${XVFB} ${VIEWER} ${OUT}/broken-seq/fire.0001.vdb --set camera.resolution=[160,90] --play
-                          --screenshot ${OUT}/broken-seq.png --after 3 --quit
-                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
-  message("${out}${err}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "playing a sequence with a broken frame: exit ${rc}")
-  endif()
-  expect_contains("${out}${err}" "playback paused: frame 2 could not be loaded (still on frame 1)")
-  string(REGEX MATCHALL "fire.0002.vdb: volumes" reports "${out}${err}")
+  run_within(60 ${XVFB} ${VIEWER} ${OUT}/broken-seq/fire.0001.vdb --set camera.resolution=[160,90] --play
+             --screenshot ${OUT}/broken-seq.png --after 3 --quit)
+  expect_contains("${LAST_OUTPUT}" "playback paused: frame 2 could not be loaded (still on frame 1)")
+  string(REGEX MATCHALL "fire.0002.vdb: volumes" reports "${LAST_OUTPUT}")
   list(LENGTH reports count)
   if(count GREATER 2)
     message(FATAL_ERROR "the broken frame was reported ${count} times: playback kept retrying it")
