@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
                "Scripted: snapshot the image at --after-spp, apply the --edit edits, compare the live render with it in the wipe view");
   app.add_option("--frame-steps", o.frameSteps, "Scripted: step the timeline this many frames, timing each frame's first image")
       ->check(CLI::NonNegativeNumber);
-  app.add_flag("--play", o.play, "Scripted: press Play once the first image shows (each frame renders to the timeline's spp, then steps)");
+  app.add_flag("--play", o.play, "Scripted: press Play once the first image shows (each frame renders to the timeline's spp, 16, then steps); a screenshot waits for the first step");
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
   app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(candela::finitePositive());

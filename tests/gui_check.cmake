@@ -351,7 +351,7 @@ elseif(MODE STREQUAL "timeline")
   endforeach()
   file(WRITE ${OUT}/broken-seq/fire.0002.vdb "not a VDB: the simulation stopped writing here")
   run_within(60 ${XVFB} ${VIEWER} ${OUT}/broken-seq/fire.0001.vdb --set camera.resolution=[160,90] --play
-             --screenshot ${OUT}/broken-seq.png --after 3 --quit)
+             --screenshot ${OUT}/broken-seq.png --after-spp 16 --quit)
   expect_contains("${LAST_OUTPUT}" "playback paused: frame 2 could not be loaded (still on frame 1)")
   string(REGEX MATCHALL "fire.0002.vdb: volumes" reports "${LAST_OUTPUT}")
   list(LENGTH reports count)

@@ -140,9 +140,16 @@ void ScriptedDriver::step(Viewer& v) {
     return;
   }
   if (waitingForFullFrame(v)) return;
-  if (o.play && !playPressed_) {
-    v.playing_ = true;
-    playPressed_ = true;
+  if (o.play) {
+    if (!playPressed_) {
+      v.playing_ = true;
+      playPressed_ = true;
+      playFrom_ = v.edited_.render.frame;
+      return;
+    }
+    // What follows (a screenshot) waits for the first step to start, or for playback to pause on a
+    // frame that could not load: the step comes at the timeline's spp, whatever the machine's speed.
+    if (v.playing_ && v.edited_.render.frame == playFrom_) return;
   }
   // A snapshot of the first image, compared with the live render once the edits below land.
   if (o.snapshotCompare && !snapshotDone_) {

@@ -34,6 +34,7 @@ class ScriptedDriver {
   bool frameRequested_ = false;
   std::vector<double> frameStepMs_;
   bool inspectDone_ = false, inspectReported_ = false, playPressed_ = false;
+  int playFrom_ = 0;  // the frame --play started on
   int measureIndex_ = 0;
   std::chrono::steady_clock::time_point measureNext_, measureStart_;
   int measureFrames_ = 0;
