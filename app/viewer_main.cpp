@@ -49,13 +49,13 @@ int main(int argc, char** argv) {
   app.add_option("--drop", o.dropPath, "Scripted: open this file as if dropped on the window, once the first scene shows");
   app.add_flag("--edit-while-loading", o.editWhileLoading,
                "Scripted: apply the --edit edits as soon as the --drop file starts loading (an artist editing during a long load)");
-  app.add_option("--hold-builds", o.holdBuildsMs, "Scripted: hold every scene build back this many milliseconds (a long load, for tests)")
+  app.add_option("--hold-builds", o.holdBuildsMs, "Scripted: hold every scene build back this many milliseconds (a long load, for tests); with --edit-while-loading, the dropped file's build also waits for the scripted edits")
       ->check(CLI::Range(0, 60000));
   app.add_flag("--snapshot-compare", o.snapshotCompare,
                "Scripted: snapshot the image at --after-spp, apply the --edit edits, compare the live render with it in the wipe view");
   app.add_option("--frame-steps", o.frameSteps, "Scripted: step the timeline this many frames, timing each frame's first image")
       ->check(CLI::NonNegativeNumber);
-  app.add_flag("--play", o.play, "Scripted: press Play once the first image shows (each frame renders to the timeline's spp, 16, then steps); a screenshot waits for the first step");
+  app.add_flag("--play", o.play, "Scripted: press Play once the first image shows (each frame renders to the timeline's spp, 16, then steps); a screenshot waits for the first step to another frame (or a pause), and Play is pressed again before it");
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
   app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(candela::finitePositive());

@@ -54,6 +54,27 @@ TEST(EditHistory, AGestureIsOneStepAndAnUnchangedStateRecordsNothing) {
   EXPECT_EQ(*k.redo(), Json({{"a", 3}}));
 }
 
+// Auto exposure on open comes with the first image; an edit made before it is its own undo step.
+// Undoing that edit keeps the auto exposure: the change holds for every state that had the opened
+// exposure, and leaves one the artist set alone.
+TEST(EditHistory, AutoExposureHoldsUnderEarlierEdits) {
+  EditHistory h;
+  h.reset({{"display", {{"exposure", 0.0}}}, {"seed", 1}});
+  h.record({{"display", {{"exposure", 0.0}}}, {"seed", 7}});
+  h.record({{"display", {{"exposure", 2.0}}}, {"seed", 7}});  // set by the artist
+  h.undo();
+  h.amendEverywhere(Json::json_pointer("/display/exposure"), 0.0, -3.5);
+  EXPECT_EQ(*h.undo(), Json({{"display", {{"exposure", -3.5}}}, {"seed", 1}}));
+  EXPECT_EQ(*h.redo(), Json({{"display", {{"exposure", -3.5}}}, {"seed", 7}}));
+  EXPECT_EQ(*h.redo(), Json({{"display", {{"exposure", 2.0}}}, {"seed", 7}}));
+  // A state without the field is left as it is.
+  EditHistory bare;
+  bare.reset({{"seed", 1}});
+  bare.amendEverywhere(Json::json_pointer("/display/exposure"), 0.0, -3.5);
+  bare.record({{"seed", 2}});
+  EXPECT_EQ(*bare.undo(), Json({{"seed", 1}}));
+}
+
 // An edit whose scene cannot build (a truncated VDB typed into the file field) leaves the history
 // with the scene going back: undo after a later edit goes to the state before the failure, never
 // to the failed state, which would fail again.

@@ -27,6 +27,13 @@ class EditHistory {
   void amend(const nlohmann::json& state) {
     if (!states_.empty()) states_[current_] = state;
   }
+  // An automatic change that holds for the whole document, not for one step (auto exposure on open):
+  // every state that still has `from` at `pointer` takes `to`. An edit made before the change came
+  // is undone without undoing the change with it.
+  void amendEverywhere(const nlohmann::json::json_pointer& pointer, const nlohmann::json& from, const nlohmann::json& to) {
+    for (auto& state : states_)
+      if (state.contains(pointer) && state.at(pointer) == from) state.at(pointer) = to;
+  }
   // Records the state after an edit. An edit in the same open group as the previous one replaces it;
   // a state equal to the current one records nothing. Any redo steps are dropped.
   void record(const nlohmann::json& state, const std::string& group = "") {

@@ -127,6 +127,7 @@ void ScriptedDriver::step(Viewer& v) {
     if (waitingForFullFrame(v)) return;  // once the first scene shows
     // As if the file were dropped on the window: the same path as a real drop.
     dropped_ = true;
+    if (o.editWhileLoading && o.holdBuildsMs > 0) v.holdBuildForScriptedEdits_ = true;  // until applyEdits below
     v.droppedPaths_.push_back(o.dropPath);
     return;
   }
@@ -134,6 +135,7 @@ void ScriptedDriver::step(Viewer& v) {
     // The dropped file has started to open (pollDrops ran): edit it while it loads.
     const bool loading = v.pendingOpen_ != 0;
     applyEdits(v);
+    v.holdBuildForScriptedEdits_ = false;
     std::printf("scripted: %zu edits%s made %s %s\n", o.editsAfterStart.size(), o.resetCamera ? " and a camera reset" : "",
                 loading ? "while loading" : "after loading", o.dropPath.c_str());
     std::fflush(stdout);
@@ -147,9 +149,15 @@ void ScriptedDriver::step(Viewer& v) {
       playFrom_ = v.edited_.render.frame;
       return;
     }
-    // What follows (a screenshot) waits for the first step to start, or for playback to pause on a
-    // frame that could not load: the step comes at the timeline's spp, whatever the machine's speed.
-    if (v.playing_ && v.edited_.render.frame == playFrom_) return;
+    // What follows (a screenshot) waits for the first step to another frame to show, or for playback to pause
+    // by itself: the step comes at the timeline's spp, whatever the machine's speed. Then Play is
+    // pressed again, so the screenshot shows the frame stepped to rather than race the next step.
+    if (v.playing_ && (v.edited_.render.frame == playFrom_ || v.frameLatencyPending_)) return;
+    if (v.playing_) {
+      v.playing_ = false;
+      std::printf("scripted: paused on frame %d\n", v.edited_.render.frame);
+      std::fflush(stdout);
+    }
   }
   // A snapshot of the first image, compared with the live render once the edits below land.
   if (o.snapshotCompare && !snapshotDone_) {

@@ -41,7 +41,14 @@ Viewer::Viewer(GLFWwindow* window, const ViewerOptions& options)
   openLatencyPending_ = true;
   session_.setNotify([] { glfwPostEmptyEvent(); });  // thread-safe: wakes the event wait in run()
   if (options.holdBuildsMs > 0)
-    session_.setBuildHook([ms = options.holdBuildsMs](const SceneDesc&) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); });
+    session_.setBuildHook([this, ms = options.holdBuildsMs](const SceneDesc&) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+      // The scripted edits land while the file loads however long the UI takes between two frames;
+      // the cap is a safety net only.
+      const auto cap = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+      while (holdBuildForScriptedEdits_.load() && std::chrono::steady_clock::now() < cap)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    });
   colors_ = ColorPipeline::load(options.ocioConfig);
   if (!colors_.message().empty()) report(colors_.message());
   display_ = colors_.resolve(display_);
@@ -104,6 +111,7 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     edited_ = desc;
     edited_.display = display_;
     frames_ = sceneFrames(desc);
+    unloadableFrames_.clear();
     playing_ = false;
     history_.reset(lookState());
     dirty_ = vdb;  // an opened VDB is a new, unsaved scene
@@ -332,14 +340,12 @@ void Viewer::pollSession() {
       }
       if (frameLatencyPending_) {
         // The frame stepped to failed to load (a missing or truncated file in the sequence): the
-        // timeline stays on the frame that renders, and playback pauses rather than retry the broken
-        // frame on every image.
+        // timeline stays on the frame that renders. Play and the step buttons pass that frame from
+        // now on, as a flipbook plays over a hole, rather than retry it on every image or press.
         frameLatencyPending_ = false;
-        if (playing_) {
-          playing_ = false;
-          report("playback paused: frame " + std::to_string(frameStepTo_) + " could not be loaded (still on frame " +
-                 std::to_string(edited_.render.frame) + ")");
-        }
+        unloadableFrames_.insert(frameStepTo_);
+        report("frame " + std::to_string(frameStepTo_) + " could not be loaded (still on frame " + std::to_string(edited_.render.frame) +
+               "): Play and the step buttons pass it; the slider tries it again");
       }
     }
     haveScene_ = true;
@@ -374,8 +380,11 @@ void Viewer::pollSession() {
     if (autoExposurePending_ && display_.exposure != openedExposure_) autoExposurePending_ = false;
     if (autoExposurePending_ && full && latest->film.spp() >= 4 && !pendingOpen_ && latest->request >= openedRequest_) {
       autoExposurePending_ = false;
+      const float opened = display_.exposure;
       display_.exposure = autoExposureStops(latest->film.meanImage());
       applyDisplay();
+      // Edits made before the first image (the undo steps under this one) keep it too.
+      history_.amendEverywhere(nlohmann::json::json_pointer("/display/exposure"), opened, display_.exposure);
       history_.amend(lookState());
       report("auto exposure: " + std::to_string(display_.exposure).substr(0, 5) + " stops");
     }
@@ -403,6 +412,7 @@ void Viewer::restoreDocumentBeforeOpen() {
   display_ = d.display;
   history_ = d.history;
   frames_ = d.frames;
+  unloadableFrames_.clear();
   fileScene_ = d.fileScene;
   beforeOpen_.reset();
   autoExposurePending_ = false;

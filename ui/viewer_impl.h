@@ -24,6 +24,7 @@
 
 #include <imgui.h>
 
+#include <atomic>
 #include <chrono>
 #include <climits>
 #include <deque>
@@ -32,6 +33,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -115,6 +117,7 @@ class Viewer {
   void drawSnapshots();
   void drawTimeline();
   void setFrame(int frame);
+  int neighbourFrame(int direction) const;  // the next (+1) or previous (-1) frame that may load, wrapping
   void pollTimeline();
 
   // --- panels and menus ---
@@ -139,6 +142,9 @@ class Viewer {
 
   GLFWwindow* window_;
   ViewerOptions options_;
+  // Scripted --edit-while-loading: the dropped file's build is held until the edits are made (read on
+  // the build thread, so declared before the session that joins it).
+  std::atomic<bool> holdBuildForScriptedEdits_{false};
   RenderSession session_;
   ColorPipeline colors_;
   std::unique_ptr<GlDisplay> gl_;
@@ -229,6 +235,9 @@ class Viewer {
   int playSpp_ = 16;
   float playSeconds_ = 0.0f;
   int frameStepTo_ = 0;  // the frame the last step asked for
+  // Frames that failed to load since the sequence was opened (a missing or truncated file): Play and
+  // the step buttons pass them; the slider and |< >| still try them, and one that loads leaves the set.
+  std::set<int> unloadableFrames_;
   ViewerClock::time_point frameStepStart_;
   bool frameLatencyPending_ = false;
   double lastFrameStepMs_ = 0.0;

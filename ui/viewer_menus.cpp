@@ -239,8 +239,8 @@ void Viewer::handleKeys() {
   if (k && shift) showSnapshots_ = !showSnapshots_;
   else if (k && frame_ && !compare_) takeSnapshot();
   if (!frames_.empty()) {
-    if (left) setFrame(edited_.render.frame - 1);
-    if (right) setFrame(edited_.render.frame + 1);
+    if (left) setFrame(neighbourFrame(-1));
+    if (right) setFrame(neighbourFrame(+1));
     if (space) playing_ = !playing_;
   }
   if (zero) canvas_.resetZoom();

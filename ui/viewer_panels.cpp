@@ -483,12 +483,24 @@ void Viewer::setFrame(int frame) {
   submitEdit("frame");
 }
 
+int Viewer::neighbourFrame(int direction) const {
+  int frame = edited_.render.frame;
+  for (int tried = 0; tried <= frames_.last - frames_.first; ++tried) {
+    frame += direction;
+    if (frame > frames_.last) frame = frames_.first;
+    if (frame < frames_.first) frame = frames_.last;
+    if (!unloadableFrames_.count(frame)) return frame;
+  }
+  return edited_.render.frame;
+}
+
 void Viewer::pollTimeline() {
   if (frames_.empty() || !frame_ || !frame_->scene) return;
   const bool current = frame_->scene->render.frame == edited_.render.frame && !frame_->preview && frame_->film.spp() > 0 && !session_.loading();
   if (!current) return;
   if (frameLatencyPending_) {
     frameLatencyPending_ = false;
+    unloadableFrames_.erase(edited_.render.frame);  // it loads now (the file was fixed)
     lastFrameStepMs_ = 1000.0 * secondsSince(frameStepStart_);
     std::printf("frame %d: first image %.0f ms after the step\n", edited_.render.frame, lastFrameStepMs_);
     std::fflush(stdout);
@@ -496,13 +508,20 @@ void Viewer::pollTimeline() {
   // The next frame's grids load in the background while this one renders.
   if (!prefetcher_) prefetcher_ = std::make_unique<FramePrefetcher>();
   SceneDesc next = edited_;
-  next.render.frame = edited_.render.frame + 1 > frames_.last ? frames_.first : edited_.render.frame + 1;
+  next.render.frame = neighbourFrame(+1);
   if (prefetchedFrame_ != next.render.frame && !prefetcher_->busy()) {
     prefetchedFrame_ = next.render.frame;
     prefetcher_->prefetch(next);
   }
   const bool frameDone = frame_->film.spp() >= playSpp_ || (playSeconds_ > 0.0f && frame_->seconds >= playSeconds_);
-  if (playing_ && frameDone) setFrame(next.render.frame);
+  if (playing_ && frameDone) {
+    if (next.render.frame == edited_.render.frame && !unloadableFrames_.empty()) {
+      playing_ = false;
+      report("playback paused: no other frame of the sequence could be loaded");
+    } else {
+      setFrame(next.render.frame);
+    }
+  }
 }
 
 void Viewer::drawTimeline() {
@@ -520,12 +539,12 @@ void Viewer::drawTimeline() {
                    ImGuiWindowFlags_NoSavedSettings);
   if (ImGui::Button("|<")) setFrame(frames_.first);
   ImGui::SameLine();
-  if (ImGui::Button("<")) setFrame(edited_.render.frame - 1);
+  if (ImGui::Button("<")) setFrame(neighbourFrame(-1));
   ImGui::SameLine();
   if (ImGui::Button(playing_ ? "Pause" : "Play")) playing_ = !playing_;
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Renders each frame to the spp on the right, then steps (Space)");
   ImGui::SameLine();
-  if (ImGui::Button(">")) setFrame(edited_.render.frame + 1);
+  if (ImGui::Button(">")) setFrame(neighbourFrame(+1));
   ImGui::SameLine();
   if (ImGui::Button(">|")) setFrame(frames_.last);
   ImGui::SameLine();
@@ -545,6 +564,14 @@ void Viewer::drawTimeline() {
     ImGui::TextDisabled("%d frames, step %.0f ms", frames_.count, lastFrameStepMs_);
   else
     ImGui::TextDisabled("%d frames", frames_.count);
+  if (!unloadableFrames_.empty()) {
+    std::string list;
+    for (int f : unloadableFrames_) list += (list.empty() ? "" : ", ") + std::to_string(f);
+    if (unloadableFrames_.size() > 6) list = std::to_string(unloadableFrames_.size()) + " frames";
+    ImGui::SameLine();
+    ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.3f, 1.0f), "passed: %s", list.c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Frames that could not be loaded: Play and the step buttons pass them, the slider tries them again");
+  }
   ImGui::End();
 }
 
