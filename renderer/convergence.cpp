@@ -3,6 +3,7 @@
 #include "procedural.h"
 #include "renderer.h"
 #include "rng.h"
+#include "sequence.h"
 
 #include <algorithm>
 #include <cmath>
@@ -199,6 +200,19 @@ std::string sceneContentHash(const SceneDesc& scene, const std::string& extra) {
   doc.erase("description");
   doc["render"].erase("spp");
   doc["render"].erase("time_s");
+  for (size_t i = 0; i < scene.volumes.size(); ++i) {
+    const VolumeDesc& volume = scene.volumes[i];
+    if (volume.has_generator || volume.file.empty()) continue;
+    namespace fs = std::filesystem;
+    const fs::path file = volumeFilePath(scene, volume, scene.render.frame);
+    std::error_code error;
+    const fs::path canonical = fs::weakly_canonical(fs::absolute(file, error), error);
+    const auto size = fs::file_size(canonical, error);
+    const auto modified = fs::last_write_time(canonical, error);
+    doc["volumes"][i]["file"] = error ? file.string()
+                                      : canonical.string() + "|" + std::to_string(size) + "|" +
+                                            std::to_string(modified.time_since_epoch().count());
+  }
   const std::string text = doc.dump() + "|" + extra;
   uint64_t h = 0xcafef00dULL;
   for (char c : text) h = hashCombine(h, static_cast<uint64_t>(static_cast<unsigned char>(c)));

@@ -51,7 +51,9 @@ double relativeVarianceAgainst(const std::vector<float>& variance, const std::ve
 std::vector<float> errorFalseColour(const std::vector<float>& image, const std::vector<float>& reference, bool relative);
 
 // A stable hash of everything that decides the expected image (camera, scene content, render
-// settings but spp/time), plus `extra` (reference strategy and spp).
+// settings but spp/time), plus `extra` (reference strategy and spp). A volume file counts by what
+// identifies its content (its canonical path, size and modification time at the scene's frame), not by
+// its name in the scene: another file of the same name, or a file written again, is another image.
 std::string sceneContentHash(const SceneDesc& scene, const std::string& extra);
 
 // The reference for a scene: loaded from the cache or rendered with `strategy` at `spp` and cached

@@ -1,5 +1,6 @@
 // The artist's workflow, headless: opening a bare VDB (grid names, up axis, framing, light rig),
 // saving a scene and reopening it to the same image, EXR layers and auto exposure.
+#include "convergence.h"
 #include "procedural.h"
 #include "test_support.h"
 #include "vdb_import.h"
@@ -242,6 +243,33 @@ TEST(AutoExposure, BringsTheLogAverageToMiddleGrey) {
   EXPECT_NEAR(autoExposureStops(rgb), 2.0f, 1e-3f);
   EXPECT_EQ(autoExposureStops(std::vector<float>(30, 0.0f)), 0.0f);
   EXPECT_EQ(autoExposureStops(std::vector<float>(30, 1e-30f)), 16.0f);
+}
+
+// The cached references of bench and report are keyed on what the volume files hold, not on their
+// names in the scene: `bench` on shot-a/fire.vdb and then on shot-b/fire.vdb (two scenes that read
+// alike) used to judge the second against the first one's reference, and so did a file written again.
+TEST(ReferenceCache, KeyedOnTheVolumeFilesNotTheirNames) {
+  const fs::path dir = test::scratchDirectory("reference-cache");
+  fs::create_directories(dir / "shot-a"), fs::create_directories(dir / "shot-b");
+  std::ofstream(dir / "shot-a" / "fire.vdb") << "the first simulation";
+  std::ofstream(dir / "shot-b" / "fire.vdb") << "another simulation";
+  SceneDesc a = test::loadScene("assets/scenes/cloud.json");
+  a.volumes.resize(1);
+  a.volumes[0].has_generator = false;
+  a.volumes[0].file = "fire.vdb";
+  a.path = (dir / "shot-a" / "fire.json").string();
+  SceneDesc b = a;
+  b.path = (dir / "shot-b" / "fire.json").string();
+  const std::string keyA = sceneContentHash(a, "");
+  EXPECT_NE(keyA, sceneContentHash(b, ""));
+  // The same file by another name (absolute, or from another directory) is the same key.
+  SceneDesc absolute = a;
+  absolute.volumes[0].file = (dir / "shot-a" / "fire.vdb").string();
+  absolute.path = (dir / "shot-b" / "fire.json").string();
+  EXPECT_EQ(keyA, sceneContentHash(absolute, ""));
+  // Written again (a simulation rerun): another key.
+  std::ofstream(dir / "shot-a" / "fire.vdb") << "the simulation run again, longer";
+  EXPECT_NE(keyA, sceneContentHash(a, ""));
 }
 
 }  // namespace
