@@ -106,12 +106,18 @@ int main(int argc, char** argv) {
       // most time had no more than the least when its last pass began (equal to one pass).
       check(hiStart <= lo + 1e-6, "time shares equal to one pass (" + std::to_string(lo) + " .. " + std::to_string(hi) +
                                       " s, the last pass began at " + std::to_string(hiStart) + " s)");
-      // Each pane's strip of the figure shows a rendered image: not black, not uniform (below the label band).
+      // Each pane of the figure (row by row in its grid) shows a rendered image: not black, not
+      // uniform (below the label band).
+      int columns = 0, rows = 0;
+      check(std::sscanf(fig.metadata.at("grid").c_str(), "%dx%d", &columns, &rows) == 2 && columns > 0 && rows > 0 && columns * rows >= expected,
+            "the figure's grid " + fig.metadata.at("grid") + " holds " + std::to_string(expected) + " panes");
+      const int cellW = fig.width / columns, cellH = fig.height / rows;
       for (int k = 0; k < expected; ++k) {
         double sum = 0.0, sumSq = 0.0;
         int n = 0;
-        for (int y = fig.height / 3; y < fig.height; ++y)
-          for (int x = k * fig.width / expected + 4; x < (k + 1) * fig.width / expected - 4; ++x)
+        const int x0 = (k % columns) * cellW, y0 = (k / columns) * cellH;
+        for (int y = y0 + cellH / 3; y < y0 + cellH; ++y)
+          for (int x = x0 + 4; x < x0 + cellW - 4; ++x)
             for (int c = 0; c < 3; ++c) {
               const double v = fig.rgb8[3 * (static_cast<size_t>(y) * fig.width + x) + c];
               sum += v, sumSq += v * v, ++n;

@@ -6,6 +6,7 @@
 
 #include <imgui.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -17,13 +18,8 @@ inline ImU32 paneColor(size_t i) {
   return colors[i % 4];
 }
 
-// relMSE (y) against render seconds (x), both logarithmic, in a box of `size` at the cursor.
-inline void drawErrorChart(const ComparisonFrame& frame, ImVec2 size) {
-  ImDrawList* draw = ImGui::GetWindowDrawList();
-  const ImVec2 origin = ImGui::GetCursorScreenPos();
-  ImGui::InvisibleButton("error chart", size);
-  if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("relMSE against the reference versus render time, log-log; an unbiased estimator falls as 1/t.\n%s", kRelMseFormula);
+// relMSE (y) against render seconds (x), both logarithmic, in the box at `origin` of `size`.
+inline void drawErrorChart(ImDrawList* draw, const ComparisonFrame& frame, ImVec2 origin, ImVec2 size) {
   double x0 = 1e30, x1 = -1e30, y0 = 1e30, y1 = -1e30;
   for (const auto& p : frame.panes)
     for (const auto& s : p.series)
@@ -48,7 +44,8 @@ inline void drawErrorChart(const ComparisonFrame& frame, ImVec2 size) {
   for (double d = x0; d <= x1 + 1e-9; d += 1.0) {
     draw->AddLine(map(d, y0), map(d, y1), IM_COL32(60, 60, 66, 255));
     std::snprintf(text, sizeof(text), "%gs", std::pow(10.0, d));
-    draw->AddText(ImVec2(map(d, y0).x - 8.0f, origin.y + size.y - bottom + 2.0f), IM_COL32(150, 150, 150, 255), text);
+    const float labelX = std::min(map(d, y0).x - 8.0f, origin.x + size.x - ImGui::CalcTextSize(text).x);  // the last one inside the box
+    draw->AddText(ImVec2(labelX, origin.y + size.y - bottom + 2.0f), IM_COL32(150, 150, 150, 255), text);
   }
   for (double d = y0; d <= y1 + 1e-9; d += 1.0) {
     draw->AddLine(map(x0, d), map(x1, d), IM_COL32(60, 60, 66, 255));
@@ -63,6 +60,15 @@ inline void drawErrorChart(const ComparisonFrame& frame, ImVec2 size) {
                     map(std::log10(series[k].seconds), std::log10(series[k].relmse)), paneColor(i), 2.0f);
     }
   }
+}
+
+// The same in a panel, at the cursor, with a tooltip saying what it shows.
+inline void drawErrorChart(const ComparisonFrame& frame, ImVec2 size) {
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  ImGui::InvisibleButton("error chart", size);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("relMSE against the reference versus render time, log-log; an unbiased estimator falls as 1/t.\n%s", kRelMseFormula);
+  drawErrorChart(ImGui::GetWindowDrawList(), frame, origin, size);
 }
 
 }  // namespace candela

@@ -5,9 +5,21 @@
 
 namespace candela {
 
-void ImageCanvas::layout(const Rect& area, float aspect) {
+void ImageCanvas::layout(const Rect& area, float aspect, int panes) {
   rect_ = area;
+  paneCount_ = std::max(1, panes);
+  columns_ = rows_ = 1;
+  if (!wipe_ && paneCount_ > 1) {
+    // The grid whose panes are widest; at a tie, the one with fewer rows.
+    float best = 0.0f;
+    for (int columns = 1; columns <= paneCount_; ++columns) {
+      const int rows = (paneCount_ + columns - 1) / columns;
+      const float width = aspect > 0.0f ? std::min(area.w / columns, area.h / rows * aspect) : area.w / columns;
+      if (width > best * 1.001f) best = width, columns_ = columns, rows_ = rows;
+    }
+  }
   if (aspect <= 0.0f) return;
+  aspect *= static_cast<float>(columns_) / static_cast<float>(rows_);
   if (area.w / area.h > aspect) {
     rect_.w = area.h * aspect;
     rect_.x = area.x + 0.5f * (area.w - rect_.w);
@@ -17,9 +29,17 @@ void ImageCanvas::layout(const Rect& area, float aspect) {
   }
 }
 
-ImageCanvas::Rect ImageCanvas::paneRect(int i, int n) const {
-  if (wipe_ || n <= 1) return rect_;
-  return Rect{rect_.x + rect_.w * static_cast<float>(i) / static_cast<float>(n), rect_.y, rect_.w / static_cast<float>(n), rect_.h};
+ImageCanvas::Rect ImageCanvas::paneRect(int i) const {
+  if (wipe_ || paneCount_ <= 1) return rect_;
+  const float w = rect_.w / static_cast<float>(columns_), h = rect_.h / static_cast<float>(rows_);
+  return Rect{rect_.x + w * static_cast<float>(i % columns_), rect_.y + h * static_cast<float>(i / columns_), w, h};
+}
+
+int ImageCanvas::paneAt(ImVec2 p) const {
+  if (wipe_ || paneCount_ <= 1) return 0;
+  const int column = std::clamp(static_cast<int>(std::floor((p.x - rect_.x) / std::max(1.0f, rect_.w) * columns_)), 0, columns_ - 1);
+  const int row = std::clamp(static_cast<int>(std::floor((p.y - rect_.y) / std::max(1.0f, rect_.h) * rows_)), 0, rows_ - 1);
+  return std::min(paneCount_ - 1, row * columns_ + column);
 }
 
 ImageCanvas::PixelRect ImageCanvas::framebufferRect(const Rect& r) const {
@@ -49,19 +69,14 @@ void ImageCanvas::resetZoom() {
   updateView();
 }
 
-bool ImageCanvas::handleMouse(int paneCount) {
-  paneCount_ = std::max(1, paneCount);
+bool ImageCanvas::handleMouse() {
   ImGuiIO& io = ImGui::GetIO();
   const Rect& r = rect_;
   const bool over = !io.WantCaptureMouse && r.contains(io.MousePos);
   // Ctrl+wheel zooms the image about the cursor (2D only: the camera and the render do not change,
   // so accumulation goes on).
   if (over && io.KeyCtrl && io.MouseWheel != 0.0f) {
-    Rect pane = r;
-    if (!wipe_ && paneCount_ > 1) {
-      pane.w = r.w / paneCount_;
-      pane.x = r.x + pane.w * std::floor((io.MousePos.x - r.x) / pane.w);
-    }
+    const Rect pane = paneRect(paneAt(io.MousePos));
     const ImVec2 before = imageUv(pane, io.MousePos);
     zoom_ *= std::exp(io.MouseWheel * 0.2f);
     updateView();
@@ -72,9 +87,9 @@ bool ImageCanvas::handleMouse(int paneCount) {
     return true;
   }
   if (io.KeyShift && over && io.MouseDown[0]) {
-    const float paneW = wipe_ ? r.w : r.w / paneCount_;
-    viewCenter_.x -= io.MouseDelta.x / std::max(1.0f, paneW) / zoom_;
-    viewCenter_.y -= io.MouseDelta.y / std::max(1.0f, r.h) / zoom_;
+    const Rect pane = paneRect(0);
+    viewCenter_.x -= io.MouseDelta.x / std::max(1.0f, pane.w) / zoom_;
+    viewCenter_.y -= io.MouseDelta.y / std::max(1.0f, pane.h) / zoom_;
     updateView();
     return true;
   }
@@ -111,7 +126,7 @@ void ImageCanvas::drawPanes(const std::vector<const GlDisplay*>& panes) const {
       panes[static_cast<size_t>(i)]->blitToWindow(p.x, p.y, p.w, p.h, false, view_, a, b);
       continue;
     }
-    const PixelRect p = framebufferRect(paneRect(i, n));
+    const PixelRect p = framebufferRect(paneRect(i));
     panes[static_cast<size_t>(i)]->blitToWindow(p.x, p.y, p.w, p.h, false, view_);
   }
 }
@@ -128,7 +143,7 @@ bool ImageCanvas::readoutPixel(int width, int height, int& px, int& py) const {
   if (readoutLocked_) {
     px = lockedX_, py = lockedY_;
   } else if (rect_.contains(io.MousePos)) {
-    const ImVec2 uv = imageUv(rect_, io.MousePos);
+    const ImVec2 uv = imageUv(paneRect(paneAt(io.MousePos)), io.MousePos);
     px = static_cast<int>(uv.x * width);
     py = static_cast<int>(uv.y * height);
   } else {
@@ -140,7 +155,7 @@ bool ImageCanvas::readoutPixel(int width, int height, int& px, int& py) const {
 void ImageCanvas::toggleReadoutLock(int width, int height) {
   readoutLocked_ = !readoutLocked_;
   if (readoutLocked_ && width > 0 && height > 0) {
-    const ImVec2 uv = imageUv(rect_, ImGui::GetIO().MousePos);
+    const ImVec2 uv = imageUv(paneRect(paneAt(ImGui::GetIO().MousePos)), ImGui::GetIO().MousePos);
     lockedX_ = std::clamp(static_cast<int>(uv.x * width), 0, width - 1);
     lockedY_ = std::clamp(static_cast<int>(uv.y * height), 0, height - 1);
   }

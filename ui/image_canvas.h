@@ -1,6 +1,6 @@
 // The image area of the viewer (tev's ImageCanvas): where the image sits in the window, its 2D zoom
 // and pan (shared by every pane, so they stay in sync), the wipe divider between two images, the
-// side-by-side panes, and which pixel the readout shows. It knows nothing about scenes or rendering:
+// panes of a comparison (in the grid that shows each largest), and which pixel the readout shows. It knows nothing about scenes or rendering:
 // it draws GlDisplays it is handed.
 #pragma once
 
@@ -27,12 +27,18 @@ class ImageCanvas {
 
   explicit ImageCanvas(GLFWwindow* window) : window_(window) {}
 
-  // Fits an image of `aspect` (width / height of everything shown side by side; 0: unknown) into
-  // `area`, centred. Call once a frame before anything else.
-  void layout(const Rect& area, float aspect);
-  const Rect& rect() const { return rect_; }
-  // Pane i of n side by side (the whole rectangle in wipe mode).
-  Rect paneRect(int i, int n) const;
+  // Fits `panes` images of `aspect` (width / height of one; 0: unknown) into `area`, centred, in the
+  // grid of columns and rows that shows each largest (four 16:9 panes in a wide area: 2 x 2, not a
+  // row of four a quarter the size). In wipe mode the panes share one frame. Call once a frame
+  // before anything else.
+  void layout(const Rect& area, float aspect, int panes = 1);
+  const Rect& rect() const { return rect_; }  // every pane together
+  int columns() const { return columns_; }
+  int rows() const { return rows_; }
+  // Pane i, row by row (the whole rectangle in wipe mode).
+  Rect paneRect(int i) const;
+  // The pane under window point p (the nearest cell when p is outside them all).
+  int paneAt(ImVec2 p) const;
   PixelRect framebufferRect(const Rect& r) const;
   // Image coordinates (fractions, v down) under a window point of rectangle r, through the zoom.
   ImVec2 imageUv(const Rect& r, ImVec2 p) const;
@@ -40,7 +46,7 @@ class ImageCanvas {
 
   // Ctrl+wheel zoom about the cursor, Shift+drag pan, and (in wipe mode) dragging the divider.
   // Returns true when it used the mouse this frame (the camera must not move then).
-  bool handleMouse(int paneCount);
+  bool handleMouse();
   void resetZoom();
 
   // Wipe: two images in one frame, split at a divider the user drags.
@@ -51,14 +57,15 @@ class ImageCanvas {
   // Draws `display` into the rectangle (nearest filtering when zoomed past 2 screen pixels per
   // image pixel, unless `preview`).
   void draw(const GlDisplay& display, int imageWidth, bool preview) const;
-  // Draws `left` and `right` split at the divider (wipe) or side by side.
+  // Draws `left` and `right` split at the divider (wipe) or as two panes.
   void drawPair(const GlDisplay& left, const GlDisplay& right) const;
-  // Draws n displays side by side (or the first two split by the divider in wipe mode).
+  // Draws n displays in the panes of the layout (or the first two split by the divider in wipe mode).
   void drawPanes(const std::vector<const GlDisplay*>& panes) const;
   // The divider line and its handle, over whatever was drawn.
   void drawDivider(ImDrawList* draw) const;
 
-  // The pixel under the cursor (or the locked one) of an image of width x height; false when none.
+  // The pixel under the cursor (or the locked one) of an image of width x height, in whichever pane
+  // the cursor is over; false when none.
   bool readoutPixel(int width, int height, int& px, int& py) const;
   bool readoutLocked() const { return readoutLocked_; }
   // L: lock the readout on the pixel under the cursor, or unlock it.
@@ -68,7 +75,7 @@ class ImageCanvas {
   void updateView();
   GLFWwindow* window_;
   Rect rect_;
-  int paneCount_ = 1;
+  int paneCount_ = 1, columns_ = 1, rows_ = 1;
   ViewWindow view_;
   float zoom_ = 1.0f;
   ImVec2 viewCenter_{0.5f, 0.5f};

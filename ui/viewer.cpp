@@ -456,9 +456,8 @@ void Viewer::pollDrops() {
 }
 
 float Viewer::imageAspect() const {
-  if (compare_ && compFrame_ && compFrame_->width > 0)
-    return (canvas_.wipe() ? 1 : paneCount()) * static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
-  if (frame_) return (comparedSnapshot_ && !canvas_.wipe() ? 2.0f : 1.0f) * static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
+  if (compare_ && compFrame_ && compFrame_->width > 0) return static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
+  if (frame_) return static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
   return 0.0f;
 }
 
@@ -484,12 +483,12 @@ void Viewer::frameVolume() {
 void Viewer::handleCamera() {
   ImGuiIO& io = ImGui::GetIO();
   if (!haveScene_) return;
-  if (canvas_.handleMouse(compare_ ? paneCount() : (comparedSnapshot_ ? 2 : 1))) return;
+  if (canvas_.handleMouse()) return;
   const ImageCanvas::Rect r = canvas_.rect();
   const bool over = !io.WantCaptureMouse && r.contains(io.MousePos);
   // Ctrl+click inspects the pixel's distance densities (guide_inspector_view.h) instead of tumbling.
   if (io.KeyCtrl && dragButton_ < 0 && over && io.MouseClicked[0] && frame_) {
-    const ImVec2 uv = canvas_.imageUv(r, io.MousePos);
+    const ImVec2 uv = canvas_.imageUv(canvas_.paneRect(canvas_.paneAt(io.MousePos)), io.MousePos);
     inspector_.request(edited_, static_cast<int>(uv.x * edited_.camera.resolution.first),
                        static_cast<int>(uv.y * edited_.camera.resolution.second));
     return;
@@ -654,7 +653,7 @@ int Viewer::run() {
       int ww, wh;
       glfwGetWindowSize(window_, &ww, &wh);
       canvas_.layout({0.0f, menuHeight_, std::max(1.0f, ww - panelWidth_), std::max(1.0f, wh - menuHeight_ - statusHeight_ - timelineHeight_)},
-                     imageAspect());
+                     imageAspect(), compare_ ? paneCount() : (comparedSnapshot_ && frame_ ? 2 : 1));
       drawPanel();
       inspector_.draw();
       drawDialogs();

@@ -32,7 +32,10 @@ void Viewer::drawMenuBar() {
   if (ImGui::BeginMenu("View")) {
     if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
     if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) resetCamera();
-    if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked()) && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
+    if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked())) {
+      if (frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
+      else if (compare_ && compFrame_) canvas_.toggleReadoutLock(compFrame_->width, compFrame_->height);
+    }
     if (ImGui::MenuItem("Snapshots", "Shift+K", showSnapshots_)) showSnapshots_ = !showSnapshots_;
     ImGui::Separator();
     for (const auto& [value, name] : EnumNames<ChannelView>::get())
@@ -225,6 +228,7 @@ void Viewer::handleKeys() {
   if (f && haveScene_) frameVolume();
   if ((r || home) && haveScene_) resetCamera();
   if (l && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
+  else if (l && compare_ && compFrame_) canvas_.toggleReadoutLock(compFrame_->width, compFrame_->height);
   if (f12 || s) screenshot("");
   if (c) {
     DisplaySettings d = display_;

@@ -62,6 +62,8 @@ void Viewer::captureFigure() {
     }
     image.metadata["scene"] = scenePath_;
     image.metadata["panes"] = panes.dump();
+    // How the panes sit in the figure: row by row in a grid of columns x rows.
+    image.metadata["grid"] = std::to_string(canvas_.columns()) + "x" + std::to_string(canvas_.rows());
     image.metadata["settings"] = sceneToJson(edited_).dump();
     image.metadata["display"] = toJson(colors_.resolve(display_)).dump();
     if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());

@@ -22,13 +22,14 @@ void Viewer::drawPaneLabels() {
     const ImageCanvas::Rect r = canvas_.rect();
     const Snapshot* snap = snapshots_.find(comparedSnapshot_);
     if (canvas_.wipe()) canvas_.drawDivider(draw);
-    const float half = canvas_.wipe() ? r.w : r.w * 0.5f;
     draw->AddRectFilled(ImVec2(r.x, r.y), ImVec2(r.x + 160, r.y + 24), IM_COL32(0, 0, 0, 150));
     draw->AddText(ImVec2(r.x + 8, r.y + 4), IM_COL32(255, 255, 255, 255), "live");
     const std::string label = snap ? "snapshot " + snap->label : "snapshot";
-    const float x = canvas_.wipe() ? r.x + r.w - 260 : r.x + half;
-    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + 260, r.y + 24), IM_COL32(0, 0, 0, 150));
-    draw->AddText(ImVec2(x + 8, r.y + 4), IM_COL32(255, 220, 120, 255), label.c_str());
+    // Wipe: the snapshot is right of the divider, labelled top right; two panes: the second one.
+    const ImageCanvas::Rect second = canvas_.paneRect(1);
+    const float x = canvas_.wipe() ? r.x + r.w - 260 : second.x, y = canvas_.wipe() ? r.y : second.y;
+    draw->AddRectFilled(ImVec2(x, y), ImVec2(x + 260, y + 24), IM_COL32(0, 0, 0, 150));
+    draw->AddText(ImVec2(x + 8, y + 4), IM_COL32(255, 220, 120, 255), label.c_str());
     return;
   }
   if (!compFrame_) return;
@@ -41,10 +42,11 @@ void Viewer::drawPaneLabels() {
   if (wipe) canvas_.drawDivider(draw);
   for (size_t i = 0; i < n; ++i) {
     const PaneState& p = compFrame_->panes[i];
-    const float x = wipe ? (i == 0 ? r.x : r.x + r.w * 0.5f) : r.x + r.w * static_cast<float>(i) / static_cast<float>(n);
+    const ImageCanvas::Rect pane = canvas_.paneRect(static_cast<int>(i));
+    const float x = wipe ? (i == 0 ? r.x : r.x + r.w * 0.5f) : pane.x, y = wipe ? r.y : pane.y;
     char line[256];
     std::snprintf(line, sizeof(line), "%s  %d spp  %.2f s", p.label.c_str(), p.film ? p.film->spp() : 0, p.seconds);
-    const float paneWidth = wipe ? r.w * 0.5f : r.w / static_cast<float>(n);
+    const float paneWidth = wipe ? r.w * 0.5f : pane.w;
     std::string figures, agreement;
     if (!p.series.empty()) {
       char e[96];
@@ -57,22 +59,37 @@ void Viewer::drawPaneLabels() {
       agreement = p.agreement.agree ? "agrees" : "DISAGREES";
       agreeColor = p.agreement.agree ? IM_COL32(130, 220, 130, 255) : IM_COL32(255, 80, 70, 255);
     }
-    // Narrow panes (four side by side) put the agreement on a line of its own rather than under
+    // Narrow panes (four in a row) put the agreement on a line of its own rather than under
     // the next pane's label; every line is clipped to its pane.
     const bool oneLine = ImGui::CalcTextSize((figures + agreement).c_str()).x + 16.0f <= paneWidth;
     const float height = oneLine || agreement.empty() || figures.empty() ? 40.0f : 58.0f;
-    draw->PushClipRect(ImVec2(x, r.y), ImVec2(x + paneWidth, r.y + height), true);
-    draw->AddRectFilled(ImVec2(x, r.y), ImVec2(x + paneWidth, r.y + height), IM_COL32(0, 0, 0, 150));
-    if (wipe && i == 1) draw->AddText(ImVec2(x + paneWidth - 60, r.y + 3), paneColor(i), "(right)");
-    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, r.y + 3), paneColor(i), line);
+    draw->PushClipRect(ImVec2(x, y), ImVec2(x + paneWidth, y + height), true);
+    draw->AddRectFilled(ImVec2(x, y), ImVec2(x + paneWidth, y + height), IM_COL32(0, 0, 0, 150));
+    if (wipe && i == 1) draw->AddText(ImVec2(x + paneWidth - 60, y + 3), paneColor(i), "(right)");
+    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, y + 3), paneColor(i), line);
     if (oneLine) {
-      draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, (figures + agreement).c_str());
+      draw->AddText(ImVec2(x + 8, y + 22), agreeColor, (figures + agreement).c_str());
     } else {
-      draw->AddText(ImVec2(x + 8, r.y + 22), agreeColor, figures.empty() ? agreement.c_str() : figures.c_str());
-      if (!figures.empty()) draw->AddText(ImVec2(x + 8, r.y + 40), agreeColor, agreement.c_str());
+      draw->AddText(ImVec2(x + 8, y + 22), agreeColor, figures.empty() ? agreement.c_str() : figures.c_str());
+      if (!figures.empty()) draw->AddText(ImVec2(x + 8, y + 40), agreeColor, agreement.c_str());
     }
     draw->PopClipRect();
-    if (i > 0 && !wipe) draw->AddLine(ImVec2(x, r.y), ImVec2(x, r.y + r.h), IM_COL32(20, 20, 20, 255), 2.0f);
+    // The grid's lines: left of every pane but the first column's, above every pane below the first row.
+    if (!wipe && x > r.x + 1.0f) draw->AddLine(ImVec2(x, y), ImVec2(x, y + pane.h), IM_COL32(20, 20, 20, 255), 2.0f);
+    if (!wipe && y > r.y + 1.0f) draw->AddLine(ImVec2(x, y), ImVec2(x + pane.w, y), IM_COL32(20, 20, 20, 255), 2.0f);
+  }
+  // A grid cell no pane fills (three panes in 2 x 2) shows the error-versus-time chart, labelled, so
+  // the window and a saved figure carry the curves beside the images.
+  if (!wipe && canvas_.columns() * canvas_.rows() > static_cast<int>(n) && n > 0) {
+    const ImageCanvas::Rect cell = canvas_.paneRect(static_cast<int>(n));
+    const ImVec2 origin(cell.x + 8.0f, cell.y + 30.0f), size(cell.w - 16.0f, cell.h - 38.0f);
+    if (size.x > 80.0f && size.y > 60.0f) {
+      draw->AddRectFilled(ImVec2(cell.x, cell.y), ImVec2(cell.x + cell.w, cell.y + cell.h), IM_COL32(25, 25, 28, 255));
+      draw->AddLine(ImVec2(cell.x, cell.y), ImVec2(cell.x, cell.y + cell.h), IM_COL32(20, 20, 20, 255), 2.0f);
+      draw->AddLine(ImVec2(cell.x, cell.y), ImVec2(cell.x + cell.w, cell.y), IM_COL32(20, 20, 20, 255), 2.0f);
+      draw->AddText(ImVec2(cell.x + 8.0f, cell.y + 6.0f), IM_COL32(200, 200, 200, 255), "relMSE against time (log-log)");
+      drawErrorChart(draw, *compFrame_, origin, size);
+    }
   }
 }
 
@@ -345,6 +362,23 @@ void Viewer::drawStatusBar() {
     const Rgb m = film.mean(fx, fy), se = film.standardError(fx, fy);
     ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", m.r,
                 m.g, m.b, se.r, se.g, se.b, film.spp());
+  } else if (compare_ && compFrame_ && !compFrame_->panes.empty() && canvas_.readoutPixel(compFrame_->width, compFrame_->height, px, py)) {
+    // A comparison: the pane under the cursor (its strategy named and coloured), so the same pixel can
+    // be read in each pane in turn, the readout locked on it.
+    const ImVec2 mouse = ImGui::GetIO().MousePos;
+    const ImageCanvas::Rect r = canvas_.rect();
+    const int under = canvas_.wipe() ? (mouse.x >= r.x + r.w * canvas_.wipePosition() ? 1 : 0) : canvas_.paneAt(mouse);
+    const size_t k = std::min(compFrame_->panes.size() - 1, static_cast<size_t>(under));
+    const PaneState& pane = compFrame_->panes[k];
+    if (pane.film && pane.film->width() == compFrame_->width && pane.film->height() == compFrame_->height) {
+      const Rgb m = pane.film->mean(px, py), se = pane.film->standardError(px, py);
+      ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(paneColor(k)), "%s", pane.label.c_str());
+      ImGui::SameLine();
+      ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", m.r,
+                  m.g, m.b, se.r, se.g, se.b, pane.film->spp());
+    } else {
+      ImGui::TextDisabled("pixel (%d, %d): %s has no image yet", px, py, pane.label.c_str());
+    }
   } else {
     ImGui::TextDisabled("pixel readout: hover the image (L locks)");
   }
