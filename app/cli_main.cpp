@@ -176,11 +176,20 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   }
   const int count = last - first + 1;
   const auto start = std::chrono::steady_clock::now();
+  // A frame whose files cannot be read (a missing or truncated sim frame) is reported and passed: the
+  // other frames of a long batch still render, and the exit status says some did not.
+  std::vector<int> failed;
   for (int f = first; f <= last; ++f) {
     SceneDesc frame = desc;
     frame.render.frame = f;
     const std::string path = substituteFrame(pattern, f);
-    renderOne(frame, scenePath, path, threads, true);
+    try {
+      renderOne(frame, scenePath, path, threads, true);
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "\nerror: frame %d: %s (going on with the next frame)\n", f, e.what());
+      failed.push_back(f);
+      continue;
+    }
     // A progress bar on stderr (stdout stays one line per frame, for logs).
     const int done = f - first + 1;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -191,6 +200,13 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
     std::fflush(stdout);
   }
   std::fprintf(stderr, "\n");
+  if (!failed.empty()) {
+    std::string list;
+    for (int f : failed) list += (list.empty() ? "" : ", ") + std::to_string(f);
+    std::fprintf(stderr, "error: %zu of %d frames could not be rendered (frames %s; the errors above say why); the others were written\n",
+                 failed.size(), count, list.c_str());
+    return 2;
+  }
   return 0;
 }
 

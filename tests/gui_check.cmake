@@ -367,6 +367,16 @@ elseif(MODE STREQUAL "timeline")
   if(NOT frame EQUAL 3)
     message(FATAL_ERROR "playing past the broken frame 2 the viewer shows frame ${frame}, expected 3")
   endif()
+  # The same sequence rendered as a batch: the broken frame is reported and passed, the others are
+  # written, and the exit status (2, bad input) says one was not (it stopped at frame 2 and lost frame 3).
+  execute_process(COMMAND ${CLI} render ${OUT}/broken-seq/fire.0001.vdb --frames 1-3 --spp 2 --set camera.resolution=[64,36]
+                  -o ${OUT}/broken-cli/fire.exr RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 120)
+  message("${out}${err}")
+  if(NOT rc EQUAL 2 OR NOT EXISTS ${OUT}/broken-cli/fire.0001.exr OR NOT EXISTS ${OUT}/broken-cli/fire.0003.exr
+     OR EXISTS ${OUT}/broken-cli/fire.0002.exr)
+    message(FATAL_ERROR "a batch over a broken frame: exit ${rc}, expected 2 with frames 1 and 3 written")
+  endif()
+  expect_contains("${err}" "1 of 3 frames could not be rendered (frames 2;")
   # Every other frame broken: playback pauses, once it has tried each, rather than spin on frame 1.
   file(MAKE_DIRECTORY ${OUT}/broken-seq-2)
   file(COPY_FILE ${OUT}/seq/fire.0001.vdb ${OUT}/broken-seq-2/fire.0001.vdb)
