@@ -141,5 +141,22 @@ TEST(ColorPipeline, BrokenConfigFallsBackToTheShippedOneWithAMessage) {
   EXPECT_FALSE(fromEnv.displays().empty());
 }
 
+// A studio config whose LUT is not where it says (a LUT folder not mounted): OCIO's validation says
+// only "Config failed sanitycheck."; the message names the colour space and the LUT file.
+TEST(ColorPipeline, AMissingLutIsNamed) {
+  const std::string config = testing::TempDir() + "/missing-lut.ocio";
+  std::ofstream(config) << "ocio_profile_version: 2\n"
+                           "roles: {default: linear, scene_linear: linear}\n"
+                           "displays:\n  sRGB:\n    - !<View> {name: Film, colorspace: film}\n"
+                           "colorspaces:\n"
+                           "  - !<ColorSpace>\n    name: linear\n"
+                           "  - !<ColorSpace>\n    name: film\n"
+                           "    from_scene_reference: !<FileTransform> {src: studio_film_lut.spi1d, interpolation: linear}\n";
+  const ColorPipeline p = ColorPipeline::load(config);
+  EXPECT_EQ(p.configPath(), ColorPipeline::shippedConfigPath());
+  EXPECT_NE(p.message().find("\"film\""), std::string::npos) << p.message();
+  EXPECT_NE(p.message().find("studio_film_lut.spi1d"), std::string::npos) << p.message();
+}
+
 }  // namespace
 }  // namespace candela

@@ -10,10 +10,30 @@ std::string ColorPipeline::shippedConfigPath() { return std::string(CANDELA_ASSE
 
 namespace {
 
+// OCIO 2.1's validate() says only "Config failed sanitycheck." for some failures, a LUT file it
+// cannot find among them (a studio config whose LUT folder is not mounted). Building each colour
+// space's processor from scene_linear names the part that fails and the paths it tried.
+void validateNamingWhatFails(const OCIO::ConstConfigRcPtr& config) {
+  try {
+    config->validate();
+  } catch (const std::exception& e) {
+    std::string detail;
+    for (int i = 0; i < config->getNumColorSpaces() && detail.empty(); ++i) {
+      const char* name = config->getColorSpaceNameByIndex(i);
+      try {
+        config->getProcessor(OCIO::ROLE_SCENE_LINEAR, name);
+      } catch (const std::exception& inner) {
+        detail = std::string(" Colour space \"") + name + "\": " + inner.what();
+      }
+    }
+    throw std::runtime_error(e.what() + detail);
+  }
+}
+
 OCIO::ConstConfigRcPtr loadValidated(const std::string& path) {
   if (!std::filesystem::exists(path)) throw std::runtime_error("the file does not exist");
   OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(path.c_str());
-  config->validate();
+  validateNamingWhatFails(config);
   if (config->getNumDisplays() == 0) throw std::runtime_error("it defines no displays");
   if (!config->getColorSpace(OCIO::ROLE_SCENE_LINEAR)) throw std::runtime_error("it has no scene_linear role");
   return config;
