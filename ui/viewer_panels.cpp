@@ -356,7 +356,20 @@ void Viewer::drawStatusBar() {
   }
   // Pixel readout: scene-linear values under the cursor (or at the locked pixel).
   int px = -1, py = -1;
-  if (frame_ && canvas_.readoutPixel(frame_->width, frame_->height, px, py)) {
+  const ImVec2 mouse = ImGui::GetIO().MousePos;
+  const ImageCanvas::Rect canvasRect = canvas_.rect();
+  // Which pane the cursor is over: right of the wipe divider, or the pane under it.
+  const int underCursor = canvas_.wipe() ? (mouse.x >= canvasRect.x + canvasRect.w * canvas_.wipePosition() ? 1 : 0) : canvas_.paneAt(mouse);
+  const Snapshot* comparedSnapshot = comparedSnapshot_ && frame_ && !compare_ ? snapshots_.find(comparedSnapshot_) : nullptr;
+  if (comparedSnapshot && underCursor == 1 && comparedSnapshot->image.width == frame_->width && comparedSnapshot->image.height == frame_->height &&
+      canvas_.readoutPixel(frame_->width, frame_->height, px, py)) {
+    // Over the snapshot: its own values (it keeps the mean only).
+    const float* v = &comparedSnapshot->image.rgb[3 * (static_cast<size_t>(py) * frame_->width + px)];
+    ImGui::TextColored(ImVec4(1.0f, 0.86f, 0.47f, 1.0f), "snapshot %s", comparedSnapshot->label.c_str());
+    ImGui::SameLine();
+    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", v[0], v[1], v[2],
+                comparedSnapshot->spp);
+  } else if (frame_ && canvas_.readoutPixel(frame_->width, frame_->height, px, py)) {
     const Film& film = frame_->film;
     const int fx = px * film.width() / frame_->width, fy = py * film.height() / frame_->height;
     const Rgb m = film.mean(fx, fy), se = film.standardError(fx, fy);
@@ -365,10 +378,7 @@ void Viewer::drawStatusBar() {
   } else if (compare_ && compFrame_ && !compFrame_->panes.empty() && canvas_.readoutPixel(compFrame_->width, compFrame_->height, px, py)) {
     // A comparison: the pane under the cursor (its strategy named and coloured), so the same pixel can
     // be read in each pane in turn, the readout locked on it.
-    const ImVec2 mouse = ImGui::GetIO().MousePos;
-    const ImageCanvas::Rect r = canvas_.rect();
-    const int under = canvas_.wipe() ? (mouse.x >= r.x + r.w * canvas_.wipePosition() ? 1 : 0) : canvas_.paneAt(mouse);
-    const size_t k = std::min(compFrame_->panes.size() - 1, static_cast<size_t>(under));
+    const size_t k = std::min(compFrame_->panes.size() - 1, static_cast<size_t>(underCursor));
     const PaneState& pane = compFrame_->panes[k];
     if (pane.film && pane.film->width() == compFrame_->width && pane.film->height() == compFrame_->height) {
       const Rgb m = pane.film->mean(px, py), se = pane.film->standardError(px, py);
