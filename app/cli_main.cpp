@@ -169,6 +169,12 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   }
   // A numbered sequence: OUT's own pattern (out.####.exr), else .#### before the extension.
   const auto [first, last] = parseFrames(framesText);
+  // A range past the sequence on disk is a mistyped range, not frames to pass one by one (1-100000
+  // over 48 files would print 99,952 errors): said at once, with the range there is.
+  const FrameRange onDisk = sceneFrames(desc);
+  if (!onDisk.empty() && (first < onDisk.first || last > onDisk.last))
+    throw InputError("--frames " + framesText + ": the sequence on disk runs from frame " + std::to_string(onDisk.first) + " to " +
+                     std::to_string(onDisk.last) + " (" + std::to_string(onDisk.count) + " files)");
   std::string pattern = out;
   if (!hasFramePattern(out)) {
     const std::filesystem::path p(out);

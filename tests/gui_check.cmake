@@ -377,6 +377,13 @@ elseif(MODE STREQUAL "timeline")
     message(FATAL_ERROR "a batch over a broken frame: exit ${rc}, expected 2 with frames 1 and 3 written")
   endif()
   expect_contains("${err}" "1 of 3 frames could not be rendered (frames 2;")
+  # A range past the sequence on disk is a mistyped range: said at once, nothing rendered.
+  execute_process(COMMAND ${CLI} render ${OUT}/broken-seq/fire.0001.vdb --frames 1-100000 --spp 2 --set camera.resolution=[64,36]
+                  -o ${OUT}/broken-range/fire.exr RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+  if(NOT rc EQUAL 2 OR EXISTS ${OUT}/broken-range/fire.0001.exr)
+    message(FATAL_ERROR "--frames past the sequence: exit ${rc}, expected 2 before any frame")
+  endif()
+  expect_contains("${err}" "--frames 1-100000: the sequence on disk runs from frame 1 to 3 (3 files)")
   # Every other frame broken: playback pauses, once it has tried each, rather than spin on frame 1.
   file(MAKE_DIRECTORY ${OUT}/broken-seq-2)
   file(COPY_FILE ${OUT}/seq/fire.0001.vdb ${OUT}/broken-seq-2/fire.0001.vdb)
