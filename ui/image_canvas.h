@@ -39,6 +39,8 @@ class ImageCanvas {
   Rect paneRect(int i) const;
   // The pane under window point p (the nearest cell when p is outside them all).
   int paneAt(ImVec2 p) const;
+  // Which image is shown at p: the pane under it, or in wipe mode 0 left of the divider, 1 right.
+  int imageAt(ImVec2 p) const { return wipe_ ? (p.x >= rect_.x + rect_.w * wipePosition_ ? 1 : 0) : paneAt(p); }
   PixelRect framebufferRect(const Rect& r) const;
   // Image coordinates (fractions, v down) under a window point of rectangle r, through the zoom.
   ImVec2 imageUv(const Rect& r, ImVec2 p) const;

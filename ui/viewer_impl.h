@@ -117,7 +117,8 @@ class Viewer {
   void drawSnapshots();
   void drawTimeline();
   void setFrame(int frame);
-  int neighbourFrame(int direction) const;  // the next (+1) or previous (-1) frame that may load, wrapping
+  int neighbourFrame(int direction) const;
+  void toggleReadoutLock();  // the next (+1) or previous (-1) frame that may load, wrapping
   void pollTimeline();
 
   // --- panels and menus ---

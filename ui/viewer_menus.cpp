@@ -32,10 +32,7 @@ void Viewer::drawMenuBar() {
   if (ImGui::BeginMenu("View")) {
     if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
     if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) resetCamera();
-    if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked())) {
-      if (frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
-      else if (compare_ && compFrame_) canvas_.toggleReadoutLock(compFrame_->width, compFrame_->height);
-    }
+    if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked())) toggleReadoutLock();
     if (ImGui::MenuItem("Snapshots", "Shift+K", showSnapshots_)) showSnapshots_ = !showSnapshots_;
     ImGui::Separator();
     for (const auto& [value, name] : EnumNames<ChannelView>::get())
@@ -199,6 +196,12 @@ void Viewer::drawDialogs() {
   }
 }
 
+// L: lock the readout on the pixel under the cursor, in the image shown (live, or the comparison's panes).
+void Viewer::toggleReadoutLock() {
+  if (frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
+  else if (compare_ && compFrame_) canvas_.toggleReadoutLock(compFrame_->width, compFrame_->height);
+}
+
 void Viewer::handleKeys() {
   ImGuiIO& io = ImGui::GetIO();
   // Modifiers through GLFW's sticky keys as well as ImGui: a chord pressed and released between two
@@ -227,8 +230,7 @@ void Viewer::handleKeys() {
   }
   if (f && haveScene_) frameVolume();
   if ((r || home) && haveScene_) resetCamera();
-  if (l && frame_) canvas_.toggleReadoutLock(frame_->width, frame_->height);
-  else if (l && compare_ && compFrame_) canvas_.toggleReadoutLock(compFrame_->width, compFrame_->height);
+  if (l) toggleReadoutLock();
   if (f12 || s) screenshot("");
   if (c) {
     DisplaySettings d = display_;

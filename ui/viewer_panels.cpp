@@ -356,10 +356,13 @@ void Viewer::drawStatusBar() {
   }
   // Pixel readout: scene-linear values under the cursor (or at the locked pixel).
   int px = -1, py = -1;
-  const ImVec2 mouse = ImGui::GetIO().MousePos;
-  const ImageCanvas::Rect canvasRect = canvas_.rect();
-  // Which pane the cursor is over: right of the wipe divider, or the pane under it.
-  const int underCursor = canvas_.wipe() ? (mouse.x >= canvasRect.x + canvasRect.w * canvas_.wipePosition() ? 1 : 0) : canvas_.paneAt(mouse);
+  const int underCursor = canvas_.imageAt(ImGui::GetIO().MousePos);
+  const char* locked = canvas_.readoutLocked() ? " [locked: L]" : "";
+  auto filmReadout = [&](const Film& film, int fx, int fy) {
+    const Rgb m = film.mean(fx, fy), se = film.standardError(fx, fy);
+    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, locked, m.r, m.g, m.b, se.r, se.g, se.b,
+                film.spp());
+  };
   const Snapshot* comparedSnapshot = comparedSnapshot_ && frame_ && !compare_ ? snapshots_.find(comparedSnapshot_) : nullptr;
   if (comparedSnapshot && underCursor == 1 && comparedSnapshot->image.width == frame_->width && comparedSnapshot->image.height == frame_->height &&
       canvas_.readoutPixel(frame_->width, frame_->height, px, py)) {
@@ -367,25 +370,19 @@ void Viewer::drawStatusBar() {
     const float* v = &comparedSnapshot->image.rgb[3 * (static_cast<size_t>(py) * frame_->width + px)];
     ImGui::TextColored(ImVec4(1.0f, 0.86f, 0.47f, 1.0f), "snapshot %s", comparedSnapshot->label.c_str());
     ImGui::SameLine();
-    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", v[0], v[1], v[2],
-                comparedSnapshot->spp);
+    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  (%d spp)", px, py, locked, v[0], v[1], v[2], comparedSnapshot->spp);
   } else if (frame_ && canvas_.readoutPixel(frame_->width, frame_->height, px, py)) {
     const Film& film = frame_->film;
-    const int fx = px * film.width() / frame_->width, fy = py * film.height() / frame_->height;
-    const Rgb m = film.mean(fx, fy), se = film.standardError(fx, fy);
-    ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", m.r,
-                m.g, m.b, se.r, se.g, se.b, film.spp());
+    filmReadout(film, px * film.width() / frame_->width, py * film.height() / frame_->height);
   } else if (compare_ && compFrame_ && !compFrame_->panes.empty() && canvas_.readoutPixel(compFrame_->width, compFrame_->height, px, py)) {
     // A comparison: the pane under the cursor (its strategy named and coloured), so the same pixel can
     // be read in each pane in turn, the readout locked on it.
     const size_t k = std::min(compFrame_->panes.size() - 1, static_cast<size_t>(underCursor));
     const PaneState& pane = compFrame_->panes[k];
     if (pane.film && pane.film->width() == compFrame_->width && pane.film->height() == compFrame_->height) {
-      const Rgb m = pane.film->mean(px, py), se = pane.film->standardError(px, py);
       ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(paneColor(k)), "%s", pane.label.c_str());
       ImGui::SameLine();
-      ImGui::Text("pixel (%d, %d)%s  RGB %.5g %.5g %.5g  std. error %.3g %.3g %.3g  (%d spp)", px, py, canvas_.readoutLocked() ? " [locked: L]" : "", m.r,
-                  m.g, m.b, se.r, se.g, se.b, pane.film->spp());
+      filmReadout(*pane.film, px, py);
     } else {
       ImGui::TextDisabled("pixel (%d, %d): %s has no image yet", px, py, pane.label.c_str());
     }
