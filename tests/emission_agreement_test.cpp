@@ -48,7 +48,9 @@ const std::vector<Variant>& variants() {
 
 SceneDesc variantScene(const std::string& scene, const std::vector<std::string>& base, const std::vector<std::string>& extra,
                        uint32_t seed) {
-  std::vector<std::string> sets = base;
+  // Conventional unless the variant names a preset (the shipped scenes name auto).
+  std::vector<std::string> sets = {"strategy.preset=\"conventional\""};
+  sets.insert(sets.end(), base.begin(), base.end());
   sets.insert(sets.end(), extra.begin(), extra.end());
   sets.push_back("render.seed=" + std::to_string(seed));
   return test::loadScene(scene, sets);

@@ -146,7 +146,7 @@ TEST(EmissionLight, NonEmissiveVolumesAreNotLightsAndCostNothing) {
   EXPECT_TRUE(scene->volumeLights().empty());
   EXPECT_FALSE(scene->hasEmissiveMedia());
   // The emission term leaves a non-emissive medium's majorant exactly maj(mu_t).
-  SceneDesc plain = test::loadScene("assets/scenes/cloud.json");
+  SceneDesc plain = test::loadScene("assets/scenes/cloud.json", {"strategy.preset=\"conventional\""});
   auto conventional = Scene::build(plain);
   const Medium& a = *scene->mediaOwned()[0];
   const Medium& b = *conventional->mediaOwned()[0];

@@ -163,7 +163,7 @@ TEST(MajorantGrid, CoarsenedKeepsTheDomainAndBoundsTheFineCells) {
 // emitter keep the cells asked for.
 TEST(MajorantGrid, OnlyThinMediaThatEmitNothingGetCoarserCells) {
   auto coarsening = [](const char* scene, const std::vector<std::string>& edits) {
-    std::vector<std::string> all = {"camera.resolution=[8,8]"};
+    std::vector<std::string> all = {"camera.resolution=[8,8]", "strategy.preset=\"conventional\""};
     all.insert(all.end(), edits.begin(), edits.end());
     auto built = Scene::build(test::loadScene(std::string("assets/scenes/") + scene + ".json", all));
     std::map<std::string, int> out;
@@ -176,7 +176,7 @@ TEST(MajorantGrid, OnlyThinMediaThatEmitNothingGetCoarserCells) {
   EXPECT_EQ(coarsening("cloud", {}).at("cloud"), 1);
   EXPECT_EQ(coarsening("torch-in-mist", {"strategy.majorant.coarsen_thin=false"}).at("mist"), 1);
   // The walks' domain stays the asked-for grid's, and probes are placed by the asked-for cells.
-  auto built = Scene::build(test::loadScene("assets/scenes/torch-in-mist.json", {"camera.resolution=[8,8]"}));
+  auto built = Scene::build(test::loadScene("assets/scenes/torch-in-mist.json", {"camera.resolution=[8,8]", "strategy.preset=\"conventional\""}));
   for (const Medium* m : built->media().media) {
     const MajorantGrid asked(m->densityGrid(), MajorantStructure::Grid, 8);
     EXPECT_LT(glm::length(m->majorantGrid().domainMax() - asked.domainMax()), 1e-4f) << m->desc().name;

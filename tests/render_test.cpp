@@ -202,6 +202,7 @@ TEST_P(MajorantPolicyAgreement, GlobalGridAndLooseMajorantsAgree) {
   const std::vector<std::string> res = {"camera.resolution=[32,18]"};
   auto with = [&](std::vector<std::string> extra, const char* seed) {
     extra.insert(extra.begin(), res.begin(), res.end());
+    extra.insert(extra.begin(), "strategy.preset=\"conventional\"");  // the shipped scenes name auto
     extra.push_back(std::string("render.seed=") + seed);
     return test::loadScene(scene, extra);
   };
