@@ -138,6 +138,11 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       throw InputError(desc.path + ": " + field + (v.has_generator ? ".generator" : ".file") + ": " + e.what());
     }
     for (const LoadedGrid& g : grids)
+      if (g.fromLevelSet && warnings)
+        warnings->push_back(path + ": " + field + ": grid \"" + g.grid.name() +
+                            "\" is a level set (a signed distance field): rendered as the fog volume it bounds, density 1 inside "
+                            "the surface falling to 0 across the narrow band");
+    for (const LoadedGrid& g : grids)
       if (g.sanitizedVoxels > 0 && warnings)
         warnings->push_back(path + ": " + field + ": grid \"" + g.grid.name() + "\" had " + std::to_string(g.sanitizedVoxels) +
                             " NaN, infinite or negative values; they were set to 0");

@@ -37,6 +37,7 @@ bool isVdbPath(const std::string& path) {
 
 std::string VdbImportReport::summary() const {
   std::string s = "density \"" + densityGrid + "\"";
+  if (densityIsLevelSet) s += " (a level set: rendered as the fog volume it bounds)";
   s += emissionGrid.empty() ? ", no emission" : ", emission " + emissionMode + " from \"" + emissionGrid + "\"";
   s += std::string(", ") + (up == UpAxis::Z ? "Z-up" : "Y-up") + " (" + upReason + ")";
   if (!sequence.empty()) s += ", sequence " + sequence;
@@ -145,6 +146,7 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
   }
   volume.density_grid = density->name;
   report.densityGrid = density->name;
+  report.densityIsLevelSet = density->levelSet;
   volume.albedo = Vec3(0.9f);
   // Density is extinction per world unit, the Cycles / Houdini convention (docs/conventions.md).
   volume.sigma_t_scale = 1.0f;

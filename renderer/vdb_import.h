@@ -41,6 +41,7 @@ const std::vector<std::string>& colorGridNames();        // Cd, color, emission_
 // What the importer decided, for messages (the viewer's status, the CLI's output).
 struct VdbImportReport {
   std::string densityGrid, emissionGrid, emissionMode;
+  bool densityIsLevelSet = false;  // a signed distance field, rendered as the fog volume it bounds
   UpAxis up = UpAxis::Y;
   std::string upReason;
   std::string sequence;                   // the frame pattern, when the file is one frame of several

@@ -5,6 +5,7 @@
 #include "input_limits.h"
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/LevelSetUtil.h>
 #include <nanovdb/util/OpenToNanoVDB.h>
 
 #include <algorithm>
@@ -188,7 +189,8 @@ class VdbStructureCheck {
 namespace {
 
 // The checks every float grid passes before it is used (what the renderer can represent:
-// input_limits.h), NaN / Inf / negative values set to 0, and the NanoVDB conversion.
+// input_limits.h), a level set turned into its fog volume, NaN / Inf / negative values set to 0, and
+// the NanoVDB conversion.
 LoadedGrid convertFloatGrid(const openvdb::FloatGrid::Ptr& floatGrid, const std::string& path, const std::string& field,
                             const std::string& name) {
   if (!floatGrid->transform().isLinear())
@@ -204,8 +206,19 @@ LoadedGrid convertFloatGrid(const openvdb::FloatGrid::Ptr& floatGrid, const std:
   const double voxelSize = std::cbrt(det);
   if (voxelSize < limits::kMinVoxelSize || voxelSize > limits::kMaxVoxelSize)
     fail("has voxels " + std::to_string(voxelSize) + " world units wide; expected between 1e-6 and 1e6");
-  if (floatGrid->background() != 0.0f)
-    fail("has background value " + std::to_string(floatGrid->background()) + "; expected 0 (the value outside the active voxels)");
+  // A level set (a signed distance field: a collision object, a mesh converted to VDB) holds no
+  // density; read as one it would render as a thin shell. It is rendered as the fog volume it
+  // bounds, as Houdini's Convert VDB makes one: 1 inside, falling to 0 across the band's inner half.
+  const bool levelSet = floatGrid->getGridClass() == openvdb::GRID_LEVEL_SET;
+  if (levelSet && !(std::isfinite(floatGrid->background()) && floatGrid->background() > 0.0f))
+    fail("is a level set with background value " + std::to_string(floatGrid->background()) +
+         "; expected a positive narrow-band half width (the distance outside the active voxels)");
+  if (!levelSet && floatGrid->background() != 0.0f)
+    fail("has background value " + std::to_string(floatGrid->background()) + "; expected 0 (the value outside the active voxels)" +
+         (floatGrid->background() > 0.0f ? "; a positive background is what a signed distance field has: if the grid is one, convert "
+                                            "it to a fog volume (Houdini: Convert VDB) or set its class to level set, which Candela "
+                                            "renders as the fog volume it bounds"
+                                          : ""));
   const openvdb::CoordBBox box = floatGrid->evalActiveVoxelBoundingBox();
   if (!box.empty()) {
     for (int a = 0; a < 3; ++a)
@@ -220,6 +233,11 @@ LoadedGrid convertFloatGrid(const openvdb::FloatGrid::Ptr& floatGrid, const std:
   }
   checkMemoryBudget(2.0 * static_cast<double>(floatGrid->memUsage()), path + ": " + field, "grid \"" + name + "\"");
   LoadedGrid loaded;
+  if (levelSet) {
+    // Interior tiles become active at 1, so the grid may grow by its interior's leaf-free tiles only.
+    openvdb::tools::sdfToFogVolume(*floatGrid);
+    loaded.fromLevelSet = true;
+  }
   // NaN, Inf and negative values would poison majorants and the film: replace them with 0.
   for (auto it = floatGrid->tree().beginValueAll(); it; ++it) {
     const float v = *it;
@@ -367,6 +385,7 @@ VdbFileInfo describeVdbFile(const std::string& path, const std::vector<std::stri
       gi.name = g->getName();
       gi.type = g->valueType();
       gi.isFloat = gi.type == "float";
+      gi.levelSet = g->getGridClass() == openvdb::GRID_LEVEL_SET;
       collectMetadata(*g, info.metadata);
       // The active box OpenVDB stores with each grid; without it, the grid is read below if wanted.
       openvdb::CoordBBox box;

@@ -12,6 +12,7 @@ namespace candela {
 struct LoadedGrid {
   VoxelGrid grid;
   size_t sanitizedVoxels = 0;  // NaN, Inf or negative values replaced by 0 on load
+  bool fromLevelSet = false;   // a level set, loaded as the fog volume it bounds
 };
 
 // Loads the named float grids from `path`. Throws InputError naming the file and grid for a missing
@@ -37,6 +38,7 @@ struct VdbGridInfo {
   Vec3 worldMin{0.0f}, worldMax{0.0f};  // world bounds of the active voxels (empty grid: equal)
   float maxValue = 0.0f;      // float grids read by describeVdbFile only (else 0)
   bool read = false;          // whether maxValue was measured
+  bool levelSet = false;      // its class is level set (a signed distance field): loaded as its fog volume
 };
 struct VdbFileInfo {
   std::vector<VdbGridInfo> grids;

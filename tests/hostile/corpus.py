@@ -5,6 +5,7 @@ each with its expected outcome, run through `candela-cli render` with a time and
 Outcomes:
   error   exit 2 (InputError) and a message "error: FILE: ... PATTERN" that names the scene file
   render  exit 0 and an image written
+  render-warning  exit 0, an image written and a "warning: ... PATTERN" line (how it read the input)
   clean   either of the above (bit-flipped files: some flips leave a valid file)
   usage   the command line is refused (CLI11), exit != 0, PATTERN in the message
 Anything else (a signal, exit 1 with an unnamed message, a timeout, the address-space limit, a
@@ -251,6 +252,9 @@ def vdb_cases(work, cli, hostile):
         'frustum': ('error', r'frustum'),
         'background-1': ('error', r'background'),
         'duplicate-names': ('render', ''),
+        'level-set': ('render-warning', r'grid "density" is a level set .*rendered as the fog volume'),
+        'level-set-unmarked': ('error', r'background value .*signed distance field'),
+        'level-set-background-0': ('error', r'level set with background value 0'),
     }
     cases = []
 
@@ -401,6 +405,8 @@ def run_case(case, args, default_scene):
         return m is not None and scene_name in m.group(1) and re.search(case.pattern, m.group(1)) is not None
     if case.expect == 'render':
         ok = p.returncode == 0 and os.path.exists(out)
+    elif case.expect == 'render-warning':  # renders, and says how it read the input
+        ok = p.returncode == 0 and os.path.exists(out) and re.search(r'^warning: .*' + case.pattern, err, re.M) is not None
     elif case.expect == 'error':
         ok = p.returncode == 2 and named_error()
     elif case.expect == 'clean':

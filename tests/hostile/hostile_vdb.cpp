@@ -3,6 +3,7 @@
 // types. Usage: hostile_vdb KIND OUT.vdb; `hostile_vdb list` prints the kinds.
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Dense.h>
+#include <openvdb/tools/LevelSetSphere.h>
 
 #include <cmath>
 #include <cstdio>
@@ -134,6 +135,29 @@ int main(int argc, char** argv) {
          auto g = FloatGrid::create(1.0f);
          g->setName("density");
          g->tree().setValue(Coord(0), 2.0f);
+         write(out, {g});
+       }},
+      // A signed distance field (a collision object, a converted mesh) named as the density: its
+      // class says level set, so it renders as the fog volume it bounds, with a warning.
+      {"level-set",
+       [](const std::string& out) {
+         auto g = openvdb::tools::createLevelSetSphere<FloatGrid>(0.2f, openvdb::Vec3f(0.2f), 0.02f);
+         g->setName("density");
+         write(out, {g});
+       }},
+      // The same distances with the class left unknown: a positive background, refused with a hint.
+      {"level-set-unmarked",
+       [](const std::string& out) {
+         auto g = openvdb::tools::createLevelSetSphere<FloatGrid>(0.2f, openvdb::Vec3f(0.2f), 0.02f);
+         g->setName("density");
+         g->setGridClass(openvdb::GRID_UNKNOWN);
+         write(out, {g});
+       }},
+      // A level set whose narrow band has no width (background 0): nothing to say where inside ends.
+      {"level-set-background-0",
+       [](const std::string& out) {
+         auto g = block(1.0f);
+         g->setGridClass(openvdb::GRID_LEVEL_SET);
          write(out, {g});
        }},
       {"duplicate-names",
