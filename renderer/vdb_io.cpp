@@ -144,9 +144,10 @@ class VdbStructureCheck {
     }
     return {};
   }
-  // The transform (its map's type name, then fixed-size data) and, for float grids, the root
-  // node's tile and child counts, which OpenVDB allocates by: the topology lies between here and
-  // blockPos, and each tile takes 17 bytes there, each child at least 12 + 8192 (origin, masks).
+  // The transform (its map's type name, then fixed-size data) and, for float and double grids, the
+  // root node's tile and child counts, which OpenVDB allocates by: the topology lies between here
+  // and blockPos, and each tile takes 17 bytes there (21 for double), each child at least 12 + 8192
+  // (origin, masks).
   std::string transformAndRoot(const std::string& name, const std::string& gridType, int64_t blockPos) {
     std::string map;
     if (!string(map)) return "corrupt transform of grid \"" + name + "\"";
@@ -158,14 +159,18 @@ class VdbStructureCheck {
     const auto it = mapBytes.find(map);
     if (it == mapBytes.end()) return "grid \"" + name + "\" has an unknown transform type \"" + printable(map) + "\"";
     if (!skip(it->second)) return "truncated transform of grid \"" + name + "\"";
-    if (gridType != "Tree_float_5_4_3") return {};
+    const bool isDouble = gridType == "Tree_double_5_4_3";
+    if (gridType != "Tree_float_5_4_3" && !isDouble) return {};
     int32_t bufferCount = 0;
     float background = 0.0f;
+    double doubleBackground = 0.0;
     uint32_t tiles = 0, children = 0;
-    if (!read(bufferCount) || !read(background) || !read(tiles) || !read(children)) return "truncated topology of grid \"" + name + "\"";
+    if (!read(bufferCount) || !(isDouble ? read(doubleBackground) : read(background)) || !read(tiles) || !read(children))
+      return "truncated topology of grid \"" + name + "\"";
     const int64_t here = static_cast<int64_t>(in_.tellg());
     const double topology = static_cast<double>(blockPos - here);
-    if (17.0 * tiles + (12.0 + 8192.0) * children > topology)
+    const double tileBytes = isDouble ? 21.0 : 17.0;
+    if (tileBytes * tiles + (12.0 + 8192.0) * children > topology)
       return "corrupt topology of grid \"" + name + "\" (" + std::to_string(tiles) + " tiles and " + std::to_string(children) +
              " children in " + std::to_string(blockPos - here) + " bytes)";
     return {};
@@ -282,10 +287,13 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
       throw InputError(path + ": " + field + ": expected a grid named \"" + name + "\", the file holds: " +
                        (present.empty() ? "no grids" : present));
     }
-    // Only float grids are read at all (a wrong type is refused before OpenVDB allocates it).
-    if (const auto t = structure.types.find(name); t != structure.types.end() && t->second != "Tree_float_5_4_3") {
+    // Only float grids, and double ones (Houdini's 64-bit precision) read as float, are read at all
+    // (a wrong type is refused before OpenVDB allocates it).
+    if (const auto t = structure.types.find(name);
+        t != structure.types.end() && t->second != "Tree_float_5_4_3" && t->second != "Tree_double_5_4_3") {
       file.close();
-      throw InputError(path + ": " + field + ": grid \"" + name + "\" is of type " + t->second + ", expected float (Tree_float_5_4_3)");
+      throw InputError(path + ": " + field + ": grid \"" + name + "\" is of type " + t->second +
+                       ", expected float or double (Tree_float_5_4_3, Tree_double_5_4_3)");
     }
     openvdb::GridBase::Ptr base;
     try {
@@ -295,6 +303,20 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
       throw InputError(path + ": " + field + ": cannot read grid \"" + name + "\" (" + e.what() + "); is the file truncated?");
     }
     auto floatGrid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (auto doubleGrid = openvdb::gridPtrCast<openvdb::DoubleGrid>(base)) {
+      try {
+        checkMemoryBudget(1.5 * static_cast<double>(doubleGrid->memUsage()), path + ": " + field, "grid \"" + name + "\"");
+      } catch (const InputError&) {
+        file.close();
+        throw;
+      }
+      // The same tree with each value cast to float (a value beyond float's range becomes infinite
+      // and is then set to 0 and counted, as any other).
+      floatGrid = openvdb::FloatGrid::create(openvdb::FloatTree::Ptr(new openvdb::FloatTree(doubleGrid->tree())));
+      floatGrid->setTransform(doubleGrid->transform().copy());
+      floatGrid->setName(doubleGrid->getName());
+      floatGrid->setGridClass(doubleGrid->getGridClass());
+    }
     if (!floatGrid) {
       file.close();
       throw InputError(path + ": " + field + ": grid \"" + name + "\" is of type " + base->valueType() + ", expected float");
@@ -384,7 +406,7 @@ VdbFileInfo describeVdbFile(const std::string& path, const std::vector<std::stri
       VdbGridInfo gi;
       gi.name = g->getName();
       gi.type = g->valueType();
-      gi.isFloat = gi.type == "float";
+      gi.isFloat = gi.type == "float" || gi.type == "double";  // double is read as float
       gi.levelSet = g->getGridClass() == openvdb::GRID_LEVEL_SET;
       collectMetadata(*g, info.metadata);
       // The active box OpenVDB stores with each grid; without it, the grid is read below if wanted.

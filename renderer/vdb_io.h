@@ -34,7 +34,7 @@ namespace candela {
 struct VdbGridInfo {
   std::string name;
   std::string type;           // OpenVDB's value type: "float", "vec3s", ...
-  bool isFloat = false;
+  bool isFloat = false;        // a scalar grid Candela reads: float, or double read as float
   Vec3 worldMin{0.0f}, worldMax{0.0f};  // world bounds of the active voxels (empty grid: equal)
   float maxValue = 0.0f;      // float grids read by describeVdbFile only (else 0)
   bool read = false;          // whether maxValue was measured

@@ -108,11 +108,26 @@ int main(int argc, char** argv) {
          g->tree().setValue(Coord(0), 5);
          write(out, {g});
        }},
+      // 64-bit precision (a Houdini option): read as float.
       {"double-density",
        [](const std::string& out) {
          auto g = openvdb::DoubleGrid::create(0.0);
          g->setName("density");
+         g->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
+         auto acc = g->getAccessor();
+         for (int k = 0; k < 8; ++k)
+           for (int j = 0; j < 8; ++j)
+             for (int i = 0; i < 8; ++i) acc.setValue(Coord(i, j, k), 1.0);
+         write(out, {g});
+       }},
+      // A double beyond float's range: infinite once read as float, so set to 0 and counted.
+      {"double-1e300",
+       [](const std::string& out) {
+         auto g = openvdb::DoubleGrid::create(0.0);
+         g->setName("density");
+         g->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
          g->tree().setValue(Coord(0), 1.0);
+         g->tree().setValue(Coord(1, 0, 0), 1e300);
          write(out, {g});
        }},
       {"bool-density",
