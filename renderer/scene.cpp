@@ -164,14 +164,24 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       warnings->push_back(path + ": " + field + ": grid \"" + density + "\" has no active voxels; the volume is empty");
     if (warnings)
       for (const std::string& w : emissionWarnings(v)) warnings->push_back(desc.path + ": " + field + ": " + w);
-    // Per unit length the emission grid may reach past the density grid; the renderer tracks the
-    // density grid's box only (docs/conventions.md).
-    if (warnings && v.emission.units == EmissionUnits::PerLength && v.emission.mode == EmissionMode::Grid && grids.size() > 1 &&
-        !grids[1].grid.activeBox().empty() && !grids[0].grid.activeBox().empty()) {
-      const IndexBox e = grids[1].grid.activeBox(), d = grids[0].grid.activeBox();
-      const bool same = grids[1].grid.worldFromIndex() == grids[0].grid.worldFromIndex();
-      if (same && (glm::any(glm::lessThan(e.min, d.min)) || glm::any(glm::greaterThan(e.max, d.max))))
-        warnings->push_back(desc.path + ": " + field + ": the emission grid \"" + v.emission_grid +
+    // Per unit length the emission (a flame grid, or the temperature that drives blackbody) may reach
+    // past the density grid; the renderer tracks the density grid's box only (docs/conventions.md).
+    // The grids may have transforms of their own (a temperature at half the resolution): the
+    // emission grid's extreme voxel centres are compared in the density grid's index space.
+    // Only voxels above 0 emit (a temperature grid's ambient 0 around the fire does not).
+    if (warnings && v.emission.units == EmissionUnits::PerLength && grids.size() > 1 && !grids[1].positiveBox.empty() &&
+        !grids[0].grid.activeBox().empty()) {
+      const IndexBox e = grids[1].positiveBox, d = grids[0].grid.activeBox();
+      const Mat4 densityFromEmission = glm::inverse(grids[0].grid.worldFromIndex()) * grids[1].grid.worldFromIndex();
+      bool outside = false;
+      for (int c = 0; c < 8 && !outside; ++c) {
+        const glm::vec4 corner((c & 1) ? e.max.x : e.min.x, (c & 2) ? e.max.y : e.min.y, (c & 4) ? e.max.z : e.min.z, 1.0f);
+        const Vec3 p(densityFromEmission * corner);
+        outside = glm::any(glm::lessThan(p, Vec3(d.min) - 0.5f)) || glm::any(glm::greaterThan(p, Vec3(d.max) + 0.5f));
+      }
+      if (outside)
+        warnings->push_back(desc.path + ": " + field + ": the " + (v.emission.mode == EmissionMode::Grid ? "emission" : "temperature") +
+                            " grid \"" + grids[1].grid.name() +
                             "\" reaches outside the density grid's bounding box; emission there is not rendered");
     }
     medium->setIndex(static_cast<int>(i));

@@ -244,13 +244,19 @@ LoadedGrid convertFloatGrid(const openvdb::FloatGrid::Ptr& floatGrid, const std:
     loaded.fromLevelSet = true;
   }
   // NaN, Inf and negative values would poison majorants and the film: replace them with 0.
+  openvdb::CoordBBox positive;
   for (auto it = floatGrid->tree().beginValueAll(); it; ++it) {
     const float v = *it;
     if (!std::isfinite(v) || v < 0.0f) {
       it.setValue(0.0f);
       ++loaded.sanitizedVoxels;
+    } else if (v > 0.0f && it.isValueOn()) {
+      positive.expand(it.getBoundingBox());
     }
   }
+  if (!positive.empty())
+    loaded.positiveBox = IndexBox{glm::ivec3(positive.min().x(), positive.min().y(), positive.min().z()),
+                                  glm::ivec3(positive.max().x(), positive.max().y(), positive.max().z())};
   const Mat4 worldFromIndex = toGlm(floatGrid->transform().baseMap()->getAffineMap()->getMat4());
   auto handle = nanovdb::openToNanoVDB(*floatGrid);
   loaded.grid = VoxelGrid(std::move(handle), worldFromIndex, name);

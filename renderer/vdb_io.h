@@ -13,6 +13,7 @@ struct LoadedGrid {
   VoxelGrid grid;
   size_t sanitizedVoxels = 0;  // NaN, Inf or negative values replaced by 0 on load
   bool fromLevelSet = false;   // a level set, loaded as the fog volume it bounds
+  IndexBox positiveBox;        // the active voxels above 0 (what emits, for an emission grid)
 };
 
 // Loads the named float grids from `path`. Throws InputError naming the file and grid for a missing

@@ -278,6 +278,21 @@ def vdb_cases(work, cli, hostile):
             scene_for(vdb)
         cases.append(Case(f'vdb {kind}', expect, pattern, scene=vdb[:-4] + '.json', prepare=prep))
 
+    # Emission per unit length beyond the density's box: rendered, with a warning that names the grid.
+    for kind, extra, grid in [
+            ('flame-beyond-density', {"emission": {"mode": "grid", "units": "per_length"}, "emission_grid": "flame"}, 'emission grid "flame"'),
+            ('temperature-beyond-density', {"emission": {"mode": "blackbody", "units": "per_length", "temperature_scale": 1500},
+                                            "temperature_grid": "temperature"},
+             'temperature grid "temperature"')]:
+        vdb = os.path.join(vdir, f'{kind}.vdb')
+
+        def prep(kind=kind, vdb=vdb, extra=extra):
+            os.makedirs(vdir, exist_ok=True)
+            subprocess.run([hostile, kind, vdb], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=120)
+            scene_for(vdb, extra)
+        cases.append(Case(f'vdb {kind}', 'render-warning', re.escape(grid) + r'.* reaches outside the density grid', scene=vdb[:-4] + '.json',
+                          prepare=prep))
+
     # Inputs found by the fuzzer (tests/fuzz/fuzz_vdb.cpp), kept as regressions. huge-metadata-string:
     # a file-level metadata name length of 2 GB that OpenVDB allocated before failing (60 s, 4 GB).
     found = {

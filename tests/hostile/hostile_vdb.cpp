@@ -175,6 +175,25 @@ int main(int argc, char** argv) {
          g->setGridClass(openvdb::GRID_LEVEL_SET);
          write(out, {g});
        }},
+      // Emission per unit length reaching past the density (the renderer tracks the density's box):
+      // a flame grid of the same voxels, and a temperature grid of voxels twice as large.
+      {"flame-beyond-density",
+       [](const std::string& out) {
+         auto flame = FloatGrid::create(0.0f);
+         flame->setName("flame");
+         flame->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
+         flame->tree().setValue(Coord(20, 2, 2), 1.0f);
+         flame->tree().setValue(Coord(2, 2, 2), 1.0f);
+         write(out, {block(1.0f), flame});
+       }},
+      {"temperature-beyond-density",
+       [](const std::string& out) {
+         auto temperature = FloatGrid::create(0.0f);
+         temperature->setName("temperature");
+         temperature->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+         for (int i = 0; i < 8; ++i) temperature->tree().setValue(Coord(i, 1, 1), 1.0f);  // 0.1 to 0.8 in x; the density ends at 0.4
+         write(out, {block(1.0f), temperature});
+       }},
       {"duplicate-names",
        [](const std::string& out) {
          auto a = block(1.0f), b = block(2.0f);
