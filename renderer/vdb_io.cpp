@@ -9,8 +9,10 @@
 #include <nanovdb/util/OpenToNanoVDB.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <filesystem>
 #include <mutex>
@@ -80,7 +82,8 @@ class VdbStructureCheck {
       const std::string baseType = type.substr(0, type.find("_HalfFloat"));
       types[name] = baseType;
       if (parent.empty()) {
-        if (const std::string e = transformAndRoot(printable(name), baseType, blockPos); !e.empty()) return e;
+        if (const std::string e = transformAndRoot(printable(name), baseType, type != baseType, compression, blockPos); !e.empty())
+          return e;
       }
       in_.seekg(endPos);
     }
@@ -144,11 +147,12 @@ class VdbStructureCheck {
     }
     return {};
   }
-  // The transform (its map's type name, then fixed-size data) and, for float and double grids, the
-  // root node's tile and child counts, which OpenVDB allocates by: the topology lies between here
-  // and blockPos, and each tile takes 17 bytes there (21 for double), each child at least 12 + 8192
-  // (origin, masks).
-  std::string transformAndRoot(const std::string& name, const std::string& gridType, int64_t blockPos) {
+  // The transform (its map's type name, then fixed-size data) and, for the grid types Candela reads
+  // (float, double, vec3s), the root node's tile and child counts, which OpenVDB allocates by: the
+  // topology lies between here and blockPos, and each tile takes 12 bytes and a value there, each
+  // child at least 12 + 8192 (origin, masks). Then the whole tree (tree()).
+  std::string transformAndRoot(const std::string& name, const std::string& gridType, bool savedAsHalf, uint32_t compression,
+                               int64_t blockPos) {
     std::string map;
     if (!string(map)) return "corrupt transform of grid \"" + name + "\"";
     static const std::map<std::string, uint64_t> mapBytes = {
@@ -159,21 +163,101 @@ class VdbStructureCheck {
     const auto it = mapBytes.find(map);
     if (it == mapBytes.end()) return "grid \"" + name + "\" has an unknown transform type \"" + printable(map) + "\"";
     if (!skip(it->second)) return "truncated transform of grid \"" + name + "\"";
-    const bool isDouble = gridType == "Tree_double_5_4_3";
-    if (gridType != "Tree_float_5_4_3" && !isDouble) return {};
+    // Bytes of a value stored whole (background, tiles, inactive values), and in a data chunk
+    // saved as half (Compression.h's RealToHalf).
+    static const std::map<std::string, std::pair<uint64_t, uint64_t>> valueBytes = {
+        {"Tree_float_5_4_3", {4, 2}}, {"Tree_double_5_4_3", {8, 2}}, {"Tree_vec3s_5_4_3", {12, 6}}};
+    const auto format = valueBytes.find(gridType);
+    if (format == valueBytes.end()) return {};
+    TreeFormat f;
+    f.value = format->second.first;
+    f.chunkValue = savedAsHalf ? format->second.second : f.value;
+    f.half = savedAsHalf;
+    f.compression = compression;
     int32_t bufferCount = 0;
-    float background = 0.0f;
-    double doubleBackground = 0.0;
     uint32_t tiles = 0, children = 0;
-    if (!read(bufferCount) || !(isDouble ? read(doubleBackground) : read(background)) || !read(tiles) || !read(children))
-      return "truncated topology of grid \"" + name + "\"";
+    if (!read(bufferCount) || !skip(f.value) || !read(tiles) || !read(children)) return "truncated topology of grid \"" + name + "\"";
     const int64_t here = static_cast<int64_t>(in_.tellg());
     const double topology = static_cast<double>(blockPos - here);
-    const double tileBytes = isDouble ? 21.0 : 17.0;
-    if (tileBytes * tiles + (12.0 + 8192.0) * children > topology)
+    if ((13.0 + static_cast<double>(f.value)) * tiles + (12.0 + 8192.0) * children > topology)
       return "corrupt topology of grid \"" + name + "\" (" + std::to_string(tiles) + " tiles and " + std::to_string(children) +
              " children in " + std::to_string(blockPos - here) + " bytes)";
+    if (!skip((13 + f.value) * tiles)) return "truncated topology of grid \"" + name + "\"";
+    return tree(name, f, children);
+  }
+
+  // How a grid's values are stored: the sizes above and the grid's compression flags.
+  struct TreeFormat {
+    uint64_t value = 4, chunkValue = 4;
+    bool half = false;
+    uint32_t compression = 0;
+  };
+  static constexpr uint32_t kZip = 0x1, kActiveMask = 0x2, kBlosc = 0x4;  // io::COMPRESS_*
+
+  // The root's children (5-4-3 internal nodes and leaves) as OpenVDB 10 reads them: each node's
+  // masks, its values (io::readCompressedValues), then the leaves' buffers in the root's order.
+  // OpenVDB reads a chunk that claims to be stored uncompressed into a buffer sized by the node's
+  // active values before it compares the two sizes (io::unzipFromStream, bloscFromStream): a corrupt
+  // count wrote past the buffer (a fuzz finding). Every chunk is checked here instead.
+  std::string tree(const std::string& name, const TreeFormat& f, uint32_t children) {
+    const std::string corrupt = "corrupt tree of grid \"" + name + "\"";
+    // Per root child, by its origin (the root's std::map order, in which buffers are read): the
+    // active counts of its leaves, in the order their topology was read.
+    std::map<std::array<int32_t, 3>, std::vector<uint16_t>> leavesByOrigin;
+    std::vector<uint64_t> mask5(512), values5(512), mask4(64), values4(64), leaf(8);
+    for (uint32_t c = 0; c < children; ++c) {
+      std::array<int32_t, 3> origin{};
+      if (!read(origin)) return corrupt + " (root child " + std::to_string(c) + ")";
+      std::vector<uint16_t> leaves;
+      if (!words(mask5) || !words(values5) || !valueChunk(f, 32768, popcount(values5)))
+        return corrupt + " (internal node at root child " + std::to_string(c) + ")";
+      for (uint64_t w = 0; w < mask5.size(); ++w)
+        for (uint64_t bits = mask5[w]; bits; bits &= bits - 1) {
+          if (!words(mask4) || !words(values4) || !valueChunk(f, 4096, popcount(values4)))
+            return corrupt + " (internal node under root child " + std::to_string(c) + ")";
+          for (uint64_t v = 0; v < mask4.size(); ++v)
+            for (uint64_t leafBits = mask4[v]; leafBits; leafBits &= leafBits - 1) {
+              if (!words(leaf)) return corrupt + " (leaf topology)";
+              leaves.push_back(static_cast<uint16_t>(popcount(leaf)));
+            }
+        }
+      // A repeated origin replaces the earlier child in OpenVDB's table (which it then leaks).
+      if (!leavesByOrigin.emplace(origin, std::move(leaves)).second) return corrupt + " (two root children at one origin)";
+    }
+    for (const auto& [origin, leaves] : leavesByOrigin)
+      for (const uint16_t active : leaves) {
+        // The buffer repeats the leaf's value mask, which the file reader skips for the topology's.
+        if (!words(leaf) || popcount(leaf) != active || !valueChunk(f, 512, active)) return corrupt + " (leaf buffer)";
+      }
     return {};
+  }
+  bool words(std::vector<uint64_t>& out) {
+    if (remaining() < out.size() * 8) return false;
+    in_.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(out.size() * 8));
+    return static_cast<bool>(in_);
+  }
+  static uint64_t popcount(const std::vector<uint64_t>& mask) {
+    uint64_t n = 0;
+    for (const uint64_t w : mask) n += static_cast<uint64_t>(__builtin_popcountll(w));
+    return n;
+  }
+  // io::readCompressedValues for `count` values of which `active` are on.
+  bool valueChunk(const TreeFormat& f, uint64_t count, uint64_t active) {
+    int8_t metadata = 0;
+    if (!read(metadata)) return false;
+    enum : int8_t { kOneInactive = 2, kMaskNoInactive = 3, kMaskOneInactive = 4, kMaskTwoInactive = 5, kAllValues = 6 };
+    if (metadata == kOneInactive || metadata == kMaskOneInactive || metadata == kMaskTwoInactive)
+      if (!skip(f.value * (metadata == kMaskTwoInactive ? 2 : 1))) return false;
+    if (metadata == kMaskNoInactive || metadata == kMaskOneInactive || metadata == kMaskTwoInactive)
+      if (!skip(count / 8)) return false;  // the selection mask
+    const uint64_t stored = (f.compression & kActiveMask) && metadata != kAllValues ? active : count;
+    if (f.half && stored == 0) return true;  // HalfReader reads nothing at all then
+    const uint64_t bytes = stored * f.chunkValue;
+    if (!(f.compression & (kZip | kBlosc))) return skip(bytes);
+    int64_t chunk = 0;
+    if (!read(chunk)) return false;
+    if (chunk <= 0) return chunk != std::numeric_limits<int64_t>::min() && static_cast<uint64_t>(-chunk) == bytes && skip(bytes);
+    return skip(static_cast<uint64_t>(chunk));
   }
   uint64_t remaining() {
     const std::streamoff p = in_.tellg();

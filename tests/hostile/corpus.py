@@ -27,6 +27,7 @@ import shutil
 import subprocess
 import sys
 import time
+import zlib
 
 JUNK = ['null', '"text"', '[]', '{}', 'true', '1e309']
 
@@ -342,12 +343,29 @@ def vdb_cases(work, cli, hostile):
                                 'AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA'
                                 'AAAA',
     }
+    found = {kind: base64.b64decode(data) for kind, data in found.items()}
+    # Zip-compressed files (zlib, then base64) whose tree holds a chunk that claims to be stored
+    # uncompressed and longer than the node's values: OpenVDB 10 read it past its buffer (a heap
+    # overflow under ASan, in an internal node's values; a float and a double grid).
+    zipped = {
+        'double-chunk-past-buffer': 'eNrt2r1Kw1AUB/DU+oVUa1Fx6ZBJBwmITVI7KeLq5Mcab3JP5UI+SpKGVnDwDXwAF59CnXyVPoKTuOmNSbStgoI4CP8fXM7N4Zyb'
+                                    'kztH3ds/UaSBXHNKpmTorGW2mo7GTc40nZGu2dTY1LaMpsm5zQ3OjLdCuWbk4uRHIu7X5PYoJLJ40LVdsgxLtxpp3UV+8MNaFuvr'
+                                    'WSzn/fNytYXssO2gZ3msNyUTCTkNUZGbal71RaXwRyqHLRaVTuB1QooiEfjTMhfFofDPluTuXHTUDZU5sUhITZjbpahWNHFyWZ+4'
+                                    '5QaMp++0ikyaWMk//V09jwtFu0eeZfdjitLxhB+b+qzcXN1Pjo6WBD1y5YBdPx4pLE9k56XlPvPoY+6h206v5dgX7SD0Dh3m0gHr'
+                                    'ZF2PO38bB59iaezuv3sGAAAAAAAAAAAAAAAAAAAAAID/6Pklkz/uFn8Gjcef+m2/spzH3rVzqlxWnyqLA+Vmu66s3pbuXgGsRIGa',
+        'float-chunk-past-buffer': 'eNrt2rlOw0AQBuCEcIkzCOhdQYEsEeJcFRGipeJoV2t7jFay15FtogRR8Ai8Cg3Pk0egoESCMbZDEiiQEAXS/ymrGa9mnPG6tXFy'
+                                   'elViI14rpUy5TV6n4x3VzFrLskzLbjlmx3Ft06s1ZEO6brPZPvwo5LXEyyUdq2RY5fQiIhKeH8pENIQl6mnZXX7fp70sru5nsZK3'
+                                   'r/PylE/CtsOBCORggTf65NTVGiebedU3lUpPVU6qFpVOGPQiimMV6kXei5NI6ettzm5VzzgwpJOoPhl96d9QvFU0ueTLIbmCn8NN'
+                                   '/1MUO+nGbv7kYzt53CjaAwqEPUwoTsdTOmlay5w8PM5Pj9YPB+TzgDc6mSqszGX3S8u1DOhz7onDTo/lUisvjIJzR/p0JntZ1/Px'
+                                   '38bRlzh5GOWZ9zB7DTgXAAAAAAAAAAAAAAAAAAAAAPiPXt8ynHaLr19m40/9tr/0Mh7mPv2Mqcu/7juy1oM8',
+    }
+    found.update({kind: zlib.decompress(base64.b64decode(data)) for kind, data in zipped.items()})
     for kind, data in found.items():
         vdb = os.path.join(vdir, f'fuzz-{kind}.vdb')
 
         def prep(data=data, vdb=vdb):
             os.makedirs(vdir, exist_ok=True)
-            open(vdb, 'wb').write(base64.b64decode(data))
+            open(vdb, 'wb').write(data)
             scene_for(vdb)
         cases.append(Case(f'vdb fuzz finding {kind}', 'error', r'corrupt|offsets|UUID', scene=vdb[:-4] + '.json', prepare=prep))
 
