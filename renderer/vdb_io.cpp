@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -40,16 +41,60 @@ Mat4 toGlm(const openvdb::math::Mat4d& m) {
 // size before OpenVDB sees the file: a corrupt length would otherwise make OpenVDB build a
 // multi-gigabyte string or seek past the end (found by tests/fuzz/fuzz_vdb.cpp). Returns an
 // empty string when the structure is sound, else what is wrong.
-class VdbStructureCheck {
+// A file read through one 64 KB window. The structure check skips most of what it walks (the data
+// chunks); a seek of the stream per skip was a system call each, 0.4-0.9 s on a 150 MB file of 65
+// thousand leaves, where the window reads each byte of it once.
+class WindowedFile {
  public:
-  explicit VdbStructureCheck(const std::string& path) : in_(path, std::ios::binary) {
+  explicit WindowedFile(const std::string& path) : in_(path, std::ios::binary), window_(kWindow) {
     in_.seekg(0, std::ios::end);
     size_ = static_cast<uint64_t>(std::max<std::streamoff>(0, in_.tellg()));
     in_.seekg(0);
   }
+  bool good() const { return static_cast<bool>(in_); }
+  uint64_t size() const { return size_; }
+  uint64_t tell() const { return pos_; }
+  uint64_t remaining() const { return pos_ < size_ ? size_ - pos_ : 0; }
+  void seek(uint64_t pos) { pos_ = pos; }
+  bool skip(uint64_t n) {
+    if (n > remaining()) return false;
+    pos_ += n;
+    return true;
+  }
+  bool read(char* out, uint64_t n) {
+    if (n > remaining()) return false;
+    while (n > 0) {
+      if (pos_ < start_ || pos_ >= start_ + length_) {
+        start_ = pos_;
+        length_ = std::min<uint64_t>(kWindow, size_ - pos_);
+        in_.clear();
+        in_.seekg(static_cast<std::streamoff>(start_));
+        in_.read(window_.data(), static_cast<std::streamsize>(length_));
+        if (static_cast<uint64_t>(in_.gcount()) != length_) {
+          length_ = 0;
+          return false;
+        }
+      }
+      const uint64_t take = std::min(n, start_ + length_ - pos_);
+      std::memcpy(out, window_.data() + (pos_ - start_), take);
+      out += take, n -= take, pos_ += take;
+    }
+    return true;
+  }
+
+ private:
+  static constexpr uint64_t kWindow = 64 * 1024;
+  std::ifstream in_;
+  std::vector<char> window_;
+  uint64_t size_ = 0, pos_ = 0, start_ = 0, length_ = 0;
+};
+
+class VdbStructureCheck {
+ public:
+  explicit VdbStructureCheck(const std::string& path) : in_(path), size_(in_.size()) {}
 
   std::string run() {
-    if (!in_) return "cannot read the file";
+    if (!in_.good()) return "cannot read the file";
     int64_t magic = 0;
     uint32_t version = 0, libraryMajor = 0, libraryMinor = 0;
     if (!read(magic) || magic != 0x56444220) return "not a VDB file (no VDB magic number at the start)";
@@ -72,10 +117,10 @@ class VdbStructureCheck {
       if (!string(name) || !string(type) || !string(parent)) return "corrupt descriptor of grid " + std::to_string(g);
       if (!read(gridPos) || !read(blockPos) || !read(endPos)) return "truncated descriptor of grid " + std::to_string(g);
       const auto inFile = [this](int64_t p) { return p >= 0 && static_cast<uint64_t>(p) <= size_; };
-      const int64_t here = static_cast<int64_t>(in_.tellg());
+      const int64_t here = static_cast<int64_t>(in_.tell());
       if (!inFile(gridPos) || !inFile(blockPos) || !inFile(endPos) || gridPos < here || blockPos < gridPos || endPos < blockPos)
         return "grid \"" + printable(name) + "\" has offsets outside the file (is it truncated?)";
-      in_.seekg(gridPos);
+      in_.seek(static_cast<uint64_t>(gridPos));
       uint32_t compression = 0;
       if (!read(compression)) return "truncated grid \"" + printable(name) + "\"";
       if (const std::string e = metaMap("metadata of grid \"" + printable(name) + "\""); !e.empty()) return e;
@@ -85,7 +130,7 @@ class VdbStructureCheck {
         if (const std::string e = transformAndRoot(printable(name), baseType, type != baseType, compression, blockPos); !e.empty())
           return e;
       }
-      in_.seekg(endPos);
+      in_.seek(static_cast<uint64_t>(endPos));
     }
     return {};
   }
@@ -96,14 +141,10 @@ class VdbStructureCheck {
  private:
   template <class T>
   bool read(T& v) {
-    if (remaining() < sizeof(T)) return false;
-    in_.read(reinterpret_cast<char*>(&v), sizeof(T));
-    return static_cast<bool>(in_);
+    return in_.read(reinterpret_cast<char*>(&v), sizeof(T));
   }
   bool skip(uint64_t n) {
-    if (remaining() < n) return false;
-    in_.seekg(static_cast<std::streamoff>(n), std::ios::cur);
-    return static_cast<bool>(in_);
+    return in_.skip(n);
   }
   // OpenVDB reads the UUID with boost's formatted operator>>, which skips whitespace before and
   // inside it: a stray tab or newline there shifts every later field by a byte from where this
@@ -111,22 +152,20 @@ class VdbStructureCheck {
   // OpenVDB writes hold the canonical 8-4-4-4-12 form, so nothing else is accepted.
   bool uuid() {
     char text[36];
-    if (remaining() < sizeof(text)) return false;
-    in_.read(text, sizeof(text));
+    if (!in_.read(text, sizeof(text))) return false;
     for (int i = 0; i < 36; ++i) {
       const bool dash = i == 8 || i == 13 || i == 18 || i == 23;
       const char c = text[i];
       const bool hex = (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
       if (dash ? c != '-' : !hex) return false;
     }
-    return static_cast<bool>(in_);
+    return true;
   }
   bool string(std::string& out) {
     uint32_t length = 0;
     if (!read(length) || length > remaining() || length > 4096) return false;
     out.resize(length);
-    in_.read(out.data(), length);
-    return static_cast<bool>(in_);
+    return in_.read(out.data(), length);
   }
   std::string metaMap(const std::string& what) {
     int32_t count = 0;
@@ -177,7 +216,7 @@ class VdbStructureCheck {
     int32_t bufferCount = 0;
     uint32_t tiles = 0, children = 0;
     if (!read(bufferCount) || !skip(f.value) || !read(tiles) || !read(children)) return "truncated topology of grid \"" + name + "\"";
-    const int64_t here = static_cast<int64_t>(in_.tellg());
+    const int64_t here = static_cast<int64_t>(in_.tell());
     const double topology = static_cast<double>(blockPos - here);
     if ((13.0 + static_cast<double>(f.value)) * tiles + (12.0 + 8192.0) * children > topology)
       return "corrupt topology of grid \"" + name + "\" (" + std::to_string(tiles) + " tiles and " + std::to_string(children) +
@@ -232,9 +271,7 @@ class VdbStructureCheck {
     return {};
   }
   bool words(std::vector<uint64_t>& out) {
-    if (remaining() < out.size() * 8) return false;
-    in_.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(out.size() * 8));
-    return static_cast<bool>(in_);
+    return in_.read(reinterpret_cast<char*>(out.data()), out.size() * 8);
   }
   static uint64_t popcount(const std::vector<uint64_t>& mask) {
     uint64_t n = 0;
@@ -259,17 +296,14 @@ class VdbStructureCheck {
     if (chunk <= 0) return chunk != std::numeric_limits<int64_t>::min() && static_cast<uint64_t>(-chunk) == bytes && skip(bytes);
     return skip(static_cast<uint64_t>(chunk));
   }
-  uint64_t remaining() {
-    const std::streamoff p = in_.tellg();
-    return p < 0 || static_cast<uint64_t>(p) > size_ ? 0 : size_ - static_cast<uint64_t>(p);
-  }
+  uint64_t remaining() const { return in_.remaining(); }
   static std::string printable(const std::string& s) {
     std::string out;
     for (char c : s.substr(0, 60)) out += (c >= 32 && c < 127) ? c : '?';
     return out;
   }
 
-  std::ifstream in_;
+  WindowedFile in_;
   uint64_t size_ = 0;
 };
 
