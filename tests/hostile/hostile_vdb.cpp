@@ -17,11 +17,19 @@ namespace {
 using openvdb::Coord;
 using openvdb::FloatGrid;
 
-// An 8^3 block of `value` at the origin, with voxel size `voxel`.
-FloatGrid::Ptr block(float value, double voxel = 0.05) {
-  auto grid = FloatGrid::create(0.0f);
-  grid->setName("density");
+// An empty grid named `name` with voxel size `voxel`.
+template <class GridT = FloatGrid>
+typename GridT::Ptr named(const std::string& name, double voxel) {
+  auto grid = GridT::create(0);
+  grid->setName(name);
   grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+  return grid;
+}
+
+// An 8^3 block of `value` at the origin, with voxel size `voxel`.
+template <class GridT = FloatGrid>
+typename GridT::Ptr block(typename GridT::ValueType value, double voxel = 0.05) {
+  auto grid = named<GridT>("density", voxel);
   auto acc = grid->getAccessor();
   for (int k = 0; k < 8; ++k)
     for (int j = 0; j < 8; ++j)
@@ -75,9 +83,7 @@ int main(int argc, char** argv) {
        }},
       {"huge-tile",
        [](const std::string& out) {
-         auto g = FloatGrid::create(0.0f);
-         g->setName("density");
-         g->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+         auto g = named("density", 0.01);
          g->tree().addTile(3, Coord(0), 1.0f, true);  // a 4096^3 constant tile
          write(out, {g});
        }},
@@ -111,21 +117,12 @@ int main(int argc, char** argv) {
       // 64-bit precision (a Houdini option): read as float.
       {"double-density",
        [](const std::string& out) {
-         auto g = openvdb::DoubleGrid::create(0.0);
-         g->setName("density");
-         g->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
-         auto acc = g->getAccessor();
-         for (int k = 0; k < 8; ++k)
-           for (int j = 0; j < 8; ++j)
-             for (int i = 0; i < 8; ++i) acc.setValue(Coord(i, j, k), 1.0);
-         write(out, {g});
+         write(out, {block<openvdb::DoubleGrid>(1.0)});
        }},
       // A double beyond float's range: infinite once read as float, so set to 0 and counted.
       {"double-1e300",
        [](const std::string& out) {
-         auto g = openvdb::DoubleGrid::create(0.0);
-         g->setName("density");
-         g->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
+         auto g = named<openvdb::DoubleGrid>("density", 0.05);
          g->tree().setValue(Coord(0), 1.0);
          g->tree().setValue(Coord(1, 0, 0), 1e300);
          write(out, {g});
@@ -179,18 +176,14 @@ int main(int argc, char** argv) {
       // a flame grid of the same voxels, and a temperature grid of voxels twice as large.
       {"flame-beyond-density",
        [](const std::string& out) {
-         auto flame = FloatGrid::create(0.0f);
-         flame->setName("flame");
-         flame->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
+         auto flame = named("flame", 0.05);
          flame->tree().setValue(Coord(20, 2, 2), 1.0f);
          flame->tree().setValue(Coord(2, 2, 2), 1.0f);
          write(out, {block(1.0f), flame});
        }},
       {"temperature-beyond-density",
        [](const std::string& out) {
-         auto temperature = FloatGrid::create(0.0f);
-         temperature->setName("temperature");
-         temperature->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+         auto temperature = named("temperature", 0.1);
          for (int i = 0; i < 8; ++i) temperature->tree().setValue(Coord(i, 1, 1), 1.0f);  // 0.1 to 0.8 in x; the density ends at 0.4
          write(out, {block(1.0f), temperature});
        }},
