@@ -320,7 +320,14 @@ LoadedGrid convertFloatGrid(const openvdb::FloatGrid::Ptr& floatGrid, const std:
     throw InputError(path + ": " + field + ": grid \"" + name + "\" has a non-linear (frustum) transform, expected a linear one");
   // What the renderer can represent (input_limits.h), checked before any dense or NanoVDB copy.
   const auto fail = [&](const std::string& what) { throw InputError(path + ": " + field + ": grid \"" + name + "\" " + what); };
-  const openvdb::math::Mat4d map = floatGrid->transform().baseMap()->getAffineMap()->getMat4();
+  // OpenVDB builds the affine form of a scale map and throws when it is nearly singular (a fuzz
+  // finding: a scale of 1e-30 in a ScaleMap).
+  openvdb::math::Mat4d map;
+  try {
+    map = floatGrid->transform().baseMap()->getAffineMap()->getMat4();
+  } catch (const openvdb::Exception& e) {
+    fail(std::string("has a degenerate (flat) index-to-world transform (") + e.what() + ")");
+  }
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
       if (!std::isfinite(map(i, j)) || std::abs(map(i, j)) > 1e12) fail("has a non-finite or absurd index-to-world transform");
@@ -450,6 +457,10 @@ std::vector<LoadedGrid> loadVdbGrids(const std::string& path, const std::vector<
     } catch (const InputError&) {
       file.close();
       throw;
+    } catch (const openvdb::Exception& e) {
+      // Whatever else OpenVDB refuses in a grid it has read is the file's fault, and names it.
+      file.close();
+      throw InputError(path + ": " + field + ": grid \"" + name + "\": " + e.what());
     }
   }
   file.close();

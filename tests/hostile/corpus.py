@@ -344,9 +344,10 @@ def vdb_cases(work, cli, hostile):
                                 'AAAA',
     }
     found = {kind: base64.b64decode(data) for kind, data in found.items()}
-    # Zip-compressed files (zlib, then base64) whose tree holds a chunk that claims to be stored
-    # uncompressed and longer than the node's values: OpenVDB 10 read it past its buffer (a heap
-    # overflow under ASan, in an internal node's values; a float and a double grid).
+    # Larger inputs, zlib-compressed then base64. Two zip-compressed files whose tree holds a chunk
+    # that claims to be stored uncompressed and longer than the node's values: OpenVDB 10 read it
+    # past its buffer (a heap overflow under ASan, in an internal node's values; a float and a double
+    # grid).
     zipped = {
         'double-chunk-past-buffer': 'eNrt2r1Kw1AUB/DU+oVUa1Fx6ZBJBwmITVI7KeLq5Mcab3JP5UI+SpKGVnDwDXwAF59CnXyVPoKTuOmNSbStgoI4CP8fXM7N4Zyb'
                                     'kztH3ds/UaSBXHNKpmTorGW2mo7GTc40nZGu2dTY1LaMpsm5zQ3OjLdCuWbk4uRHIu7X5PYoJLJ40LVdsgxLtxpp3UV+8MNaFuvr'
@@ -358,6 +359,14 @@ def vdb_cases(work, cli, hostile):
                                    'r/PylE/CtsOBCORggTf65NTVGiebedU3lUpPVU6qFpVOGPQiimMV6kXei5NI6ettzm5VzzgwpJOoPhl96d9QvFU0ueTLIbmCn8NN'
                                    '/1MUO+nGbv7kYzt53CjaAwqEPUwoTsdTOmlay5w8PM5Pj9YPB+TzgDc6mSqszGX3S8u1DOhz7onDTo/lUisvjIJzR/p0JntZ1/Px'
                                    '38bRlzh5GOWZ9zB7DTgXAAAAAAAAAAAAAAAAAAAAAPiPXt8ynHaLr19m40/9tr/0Mh7mPv2Mqcu/7juy1oM8',
+        # a ScaleMap of scale 1e-30 or so: OpenVDB threw while building its affine form, past the loader
+        'scale-map-nearly-singular': 'eNrt3M9KG0EcB/CNWlskrYZavOSwULCFEihmNzFeWorXntRex9mdn+3A/gmZzZIIhfoGPkAvfQrbU32UfQRP0lucze5qYotFklCx'
+                                     '3w8Mv5nhN5vJb3aua77b/mBoiW5LRqZkW7zVaDXdmmgIXrM4WTWH6q9rG3azIYQjbMHtYaJuD3UTFCgZ9Su6u9shYiLsOh4xm1ms'
+                                     'nuZ9zh/8cz2L1RdZnM/XP9btQOoVjhP2mM97D/RETG5dlnVnOc/6Q6YMxjJHrRSZbui3O6SUDINFPaeijgw+PtW9Q9k2X5ncjWRM'
+                                     'Zsy9LqlKsUiQx/skmBdykf4mK2bSiWf5X79UzeOTYrlPPnP6Eal0ezKIGtYj3Tn+sTC+tTjskac32A2iscT5uex5aXrAfbra90i1'
+                                     '07LsBfIg7Pg7LvfoPW9nq87e5ONiOJuY/BZL147gb+Nb2zJgIiZu+/277ffumgMA7hPA3XKOEgAAAAAAAAAAAAAAQOE5SgAAAAAA'
+                                     'AAAAMGVSMcVjEowr9unO7OolDuZ2SnOoAQAA/F9OT78MY5JknUR3hhNngwGqAwAAAAAwU78GmXz4tvguw/U4Lfjuw78w61Odxqt3'
+                                     'g9U89r66+8bR8nl5JTG+bVaNtZPS98lf2YmLc9P2LgDJbhfu',
     }
     found.update({kind: zlib.decompress(base64.b64decode(data)) for kind, data in zipped.items()})
     for kind, data in found.items():
@@ -367,7 +376,7 @@ def vdb_cases(work, cli, hostile):
             os.makedirs(vdir, exist_ok=True)
             open(vdb, 'wb').write(data)
             scene_for(vdb)
-        cases.append(Case(f'vdb fuzz finding {kind}', 'error', r'corrupt|offsets|UUID', scene=vdb[:-4] + '.json', prepare=prep))
+        cases.append(Case(f'vdb fuzz finding {kind}', 'error', r'corrupt|offsets|UUID|degenerate', scene=vdb[:-4] + '.json', prepare=prep))
 
     # A valid generated VDB, truncated and bit-flipped.
     source = os.path.join(vdir, 'source.vdb')
