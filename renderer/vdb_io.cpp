@@ -175,15 +175,49 @@ class VdbStructureCheck {
       uint32_t valueSize = 0;
       if (!string(name) || !string(type) || !read(valueSize) || valueSize > remaining())
         return "corrupt " + what + " (entry " + std::to_string(i) + ")";
-      if (type == "__delayedload" && valueSize >= 4) {
-        // Its value starts with a leaf count OpenVDB sizes two arrays by (9 bytes a leaf); every
-        // leaf stores at least its 64-byte value mask in the file, which bounds the count.
-        uint32_t leaves = 0;
-        if (!read(leaves) || leaves > size_ / 64) return "corrupt " + what + " (delayed-load leaf count " + std::to_string(leaves) + ")";
-        valueSize -= 4;
+      // A registered fixed-size type is read at its own size whatever the entry says (TypedMetadata::
+      // readValue): any other size puts OpenVDB out of step with the file (a fuzz finding: a vec4i
+      // of 12 bytes, after which OpenVDB sized a name by 1.7 GB of garbage).
+      static const std::map<std::string, uint32_t> fixedSizes = {
+          {"bool", 1},   {"double", 8}, {"float", 4},  {"int32", 4},  {"int64", 8},  {"vec2i", 8},  {"vec2s", 8},  {"vec2d", 16},
+          {"vec3i", 12}, {"vec3s", 12}, {"vec3d", 24}, {"vec4i", 16}, {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
+      if (const auto fixed = fixedSizes.find(type); fixed != fixedSizes.end() && fixed->second != valueSize)
+        return "corrupt " + what + " (entry " + std::to_string(i) + ": a " + type + " of " + std::to_string(valueSize) + " bytes)";
+      if (type == "__delayedload" && valueSize > 0) {
+        if (const std::string e = delayedLoad(valueSize); !e.empty()) return "corrupt " + what + " (delayed-load metadata: " + e + ")";
+      } else if (!skip(valueSize)) {
+        return "corrupt " + what + " (entry " + std::to_string(i) + ")";
       }
-      if (!skip(valueSize)) return "corrupt " + what + " (entry " + std::to_string(i) + ")";
     }
+    return {};
+  }
+  // io::DelayedLoadMetadata::readValue: a leaf count, then a mask per leaf (1 byte each) and
+  // optionally a compressed size per leaf (8 bytes), each stored raw or as one blosc buffer. OpenVDB
+  // sizes its arrays by the count and by the blosc header's uncompressed size, and reads what the
+  // parts say whatever the entry's size; each is checked against the entry and the file.
+  std::string delayedLoad(uint32_t valueSize) {
+    const uint64_t end = in_.tell() + valueSize;
+    uint32_t leaves = 0, bytes = 0;
+    // Every leaf stores at least its 64-byte value mask in the file, which bounds the count.
+    if (!read(leaves) || leaves > size_ / 64) return "leaf count " + std::to_string(leaves);
+    for (const uint64_t element : {uint64_t{1}, uint64_t{8}}) {
+      if (!read(bytes)) return "truncated";
+      if (element == 8 && bytes == std::numeric_limits<uint32_t>::max()) break;  // no compressed sizes stored
+      if (bytes == 0) {
+        if (!skip(leaves * element)) return "truncated";
+        continue;
+      }
+      // A blosc buffer: its 16-byte header's uncompressed and compressed sizes (bytes 4-7, 12-15)
+      // must be what the count asks for (OpenVDB pads less than 128 bytes to 128 before it
+      // compresses: compression::bloscCompress) and what the entry holds.
+      std::array<uint32_t, 4> header{};
+      const uint64_t expected = std::max<uint64_t>(leaves * element, 128);
+      if (bytes < sizeof(header) || !read(header) || header[1] != expected || header[3] != bytes)
+        return "a blosc buffer whose sizes disagree with its leaf count";
+      if (!skip(bytes - sizeof(header))) return "truncated";
+    }
+    if (in_.tell() > end) return "longer than its entry";
+    in_.seek(end);
     return {};
   }
   // The transform (its map's type name, then fixed-size data) and, for the grid types Candela reads

@@ -367,6 +367,14 @@ def vdb_cases(work, cli, hostile):
                                      '07LsBfIg7Pg7LvfoPW9nq87e5ONiOJuY/BZL147gb+Nb2zJgIiZu+/277ffumgMA7hPA3XKOEgAAAAAAAAAAAAAAQOE5SgAAAAAA'
                                      'AAAAMGVSMcVjEowr9unO7OolDuZ2SnOoAQAA/F9OT78MY5JknUR3hhNngwGqAwAAAAAwU78GmXz4tvguw/U4Lfjuw78w61Odxqt3'
                                      'g9U89r66+8bR8nl5JTG+bVaNtZPS98lf2YmLc9P2LgDJbhfu',
+        # a vec4i metadata entry of 12 bytes: OpenVDB reads 16 whatever the entry says, and then sized a
+        # metadata name by 1.7 GB of garbage (8 GB peak, 43 s)
+        'vec4i-of-12-bytes': 'eNrt2stOwkAUBuBWvMWgSNS4YcFKF4bESFtkpTFuXXnZ1mnnYCbphdBCiokL38AHcONTqCtfhUdwZdzplBYFNLggJl7+L5mc6eSc'
+                             '9nQ67Cju7Z8oUkeOOSWh6hqrGtWKXeIGZyWNkVayqLxZ2tIrBucW1znTu4lyzMjByQtE2M7L6VGDyOR+03LI1E3NLMd5F+mNH9aS'
+                             'WFhPYiatn5ejJmSFZfmR6bJoSi60yNZEVk5yadYnmcJLM8vdzH6LvUzbd+sNCgLhe9NyLQgbwjtbkrNzUS9uFJkdihYVW8xpUpDv'
+                             'FXFyWJu46fiMx880eyvxwkr66m8KaVzolbvkmlY7pCBuT3ihoc3KydX95GBrLT8iRzbY9MKBxMxEcr843WMuvffdt9vxthx7ouY3'
+                             '3EObOXTA6knV4873xs6HqA7t/VfXAAAAAAAAAAAAAAAAAAAAAAAAAADwy+APoYDz8Y89vyTSy1116MOrOFB/6Ges/qSvMHT0RlhO'
+                             'Y3RtnyqXuafsYke52S4oq7fq3fhHduzNGdXeK4a/kL4=',
     }
     found.update({kind: zlib.decompress(base64.b64decode(data)) for kind, data in zipped.items()})
     for kind, data in found.items():
