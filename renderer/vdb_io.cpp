@@ -255,7 +255,13 @@ class VdbStructureCheck {
     if ((13.0 + static_cast<double>(f.value)) * tiles + (12.0 + 8192.0) * children > topology)
       return "corrupt topology of grid \"" + name + "\" (" + std::to_string(tiles) + " tiles and " + std::to_string(children) +
              " children in " + std::to_string(blockPos - here) + " bytes)";
-    if (!skip((13 + f.value) * tiles)) return "truncated topology of grid \"" + name + "\"";
+    // Each tile: its origin, its value and an active flag OpenVDB reads into a bool, so a byte other
+    // than 0 or 1 is undefined behaviour wherever the flag is used (a fuzz finding).
+    for (uint32_t t = 0; t < tiles; ++t) {
+      uint8_t active = 0;
+      if (!skip(12 + f.value) || !read(active)) return "truncated topology of grid \"" + name + "\"";
+      if (active > 1) return "corrupt tree of grid \"" + name + "\" (root tile " + std::to_string(t) + ")";
+    }
     return tree(name, f, children);
   }
 

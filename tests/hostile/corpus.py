@@ -375,6 +375,14 @@ def vdb_cases(work, cli, hostile):
                              'FXFyWJu46fiMx880eyvxwkr66m8KaVzolbvkmlY7pCBuT3ihoc3KydX95GBrLT8iRzbY9MKBxMxEcr843WMuvffdt9vxthx7ouY3'
                              '3EObOXTA6knV4873xs6HqA7t/VfXAAAAAAAAAAAAAAAAAAAAAAAAAADwy+APoYDz8Y89vyTSy1116MOrOFB/6Ges/qSvMHT0RlhO'
                              'Y3RtnyqXuafsYke52S4oq7fq3fhHduzNGdXeK4a/kL4=',
+        # a root tile whose active flag is the byte 231: OpenVDB reads it into a bool (UBSan: not a valid
+        # value for type bool, in the double grid's conversion to float)
+        'root-tile-active-flag-231': 'eNrt271u01AUwHGH8iVUSCuoWDJkggFFAmKndAJVXSsGSldz7XuKruSPKHaipBIDb8AOC08BTLxKNtZOFVu4rh2alKoZChJS/j/p'
+                                     '6txcnWMfn8lD3Nze2XessV23nFLNc9VWZ2szbOmOVi1XidsKpP249dTb7GgdaE8r7yTRrht2aUkyk4/W7XavJ+LrtB9E4nu+67eL'
+                                     'vHfVhb8/KGPjYRlXqvrbdh0YWxEE6dCP1fCaPRhI2DardlOvss7JNMlc5qy1aWaYxt2eZJlJk+v2LMt7Jnl71+4OTbf5qKnC3Ayk'
+                                     'OVBRX7L1aZGWSI1E+1GqdHFPf3pSHGxUj/5bo4p3puWxxH4wyiUr2jNJ3nFv2s2Hb1fnWxukQ4lsg/0kn0tcuVJer0hPVCynfc9M'
+                                     'uxjL68QcpL34Vagi2VXdsuro+cVxzqLkRXH8R6yducOi3wD+mUmdGQAAAADL7OMsxgEsmx9/A2MEAAAAAAC42OTE3ksmAQAAAAAA'
+                                     'AAAAsEz4YB4AAJx9L6j9T+8JP8v/tEwWZ96r4vBT+MZ5Xz9eXRs7n580nPtfal+dF5d9uEsP59z2npXt/QK9h9ZN',
     }
     found.update({kind: zlib.decompress(base64.b64decode(data)) for kind, data in zipped.items()})
     for kind, data in found.items():
