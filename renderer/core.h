@@ -30,6 +30,10 @@ inline float maxComponent(const Rgb& c) { return glm::max(c.r, glm::max(c.g, c.b
 inline float average(const Rgb& c) { return (c.r + c.g + c.b) * (1.0f / 3.0f); }
 inline bool isFinite(const Rgb& c) { return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b); }
 inline bool isBlack(const Rgb& c) { return c.r == 0.0f && c.g == 0.0f && c.b == 0.0f; }
+// Corner c (0-7; bit 0 picks x, bit 1 y, bit 2 z) of the box [lo, hi].
+inline Vec3 boxCorner(const Vec3& lo, const Vec3& hi, int c) {
+  return Vec3((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+}
 
 // Builds an orthonormal basis around a unit vector n (Duff et al. 2017).
 inline void orthonormalBasis(const Vec3& n, Vec3& t, Vec3& b) {

@@ -98,8 +98,7 @@ void Medium::worldBounds(Vec3& lo, Vec3& hi) const {
   if (majorant_.empty()) return;
   const Vec3 a = majorant_.origin(), b = majorant_.domainMax();
   for (int c = 0; c < 8; ++c) {
-    const Vec3 p((c & 1) ? b.x : a.x, (c & 2) ? b.y : a.y, (c & 4) ? b.z : a.z);
-    const Vec3 w = Vec3(worldFromIndex_ * glm::vec4(p, 1.0f));
+    const Vec3 w = Vec3(worldFromIndex_ * glm::vec4(boxCorner(a, b, c), 1.0f));
     lo = glm::min(lo, w);
     hi = glm::max(hi, w);
   }

@@ -137,15 +137,15 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       // Name the scene file too: the user edits that, and it says which volume asked for the VDB.
       throw InputError(desc.path + ": " + field + (v.has_generator ? ".generator" : ".file") + ": " + e.what());
     }
-    for (const LoadedGrid& g : grids)
-      if (g.fromLevelSet && warnings)
+    for (const LoadedGrid& g : grids) {
+      if (warnings && g.fromLevelSet)
         warnings->push_back(path + ": " + field + ": grid \"" + g.grid.name() +
                             "\" is a level set (a signed distance field): rendered as the fog volume it bounds, density 1 inside "
                             "the surface falling to 0 across the narrow band");
-    for (const LoadedGrid& g : grids)
-      if (g.sanitizedVoxels > 0 && warnings)
+      if (warnings && g.sanitizedVoxels > 0)
         warnings->push_back(path + ": " + field + ": grid \"" + g.grid.name() + "\" had " + std::to_string(g.sanitizedVoxels) +
                             " NaN, infinite or negative values; they were set to 0");
+    }
     VoxelGrid temperatureGrid, emissionGrid;
     if (v.emission.mode == EmissionMode::Blackbody) temperatureGrid = grids[1].grid;
     if (v.emission.mode == EmissionMode::Grid) emissionGrid = grids[1].grid;
@@ -175,8 +175,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       const Mat4 densityFromEmission = glm::inverse(grids[0].grid.worldFromIndex()) * grids[1].grid.worldFromIndex();
       bool outside = false;
       for (int c = 0; c < 8 && !outside; ++c) {
-        const glm::vec4 corner((c & 1) ? e.max.x : e.min.x, (c & 2) ? e.max.y : e.min.y, (c & 4) ? e.max.z : e.min.z, 1.0f);
-        const Vec3 p(densityFromEmission * corner);
+        const Vec3 p(densityFromEmission * glm::vec4(boxCorner(Vec3(e.min), Vec3(e.max), c), 1.0f));
         outside = glm::any(glm::lessThan(p, Vec3(d.min) - 0.5f)) || glm::any(glm::greaterThan(p, Vec3(d.max) + 0.5f));
       }
       if (outside)

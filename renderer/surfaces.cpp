@@ -62,7 +62,7 @@ Surfaces::Surfaces(const std::vector<SurfaceDesc>& surfaces) : impl_(std::make_u
         addMesh(impl_->device, impl_->scene, v, tri, id);
         break;
       case SurfaceType::Box: {
-        for (int c = 0; c < 8; ++c) v.emplace_back((c & 1) ? d.max.x : d.min.x, (c & 2) ? d.max.y : d.min.y, (c & 4) ? d.max.z : d.min.z);
+        for (int c = 0; c < 8; ++c) v.push_back(boxCorner(d.min, d.max, c));
         tri = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
         addMesh(impl_->device, impl_->scene, v, tri, id);
