@@ -87,6 +87,7 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   image.metadata["seconds"] = std::to_string(t);
   image.metadata["frame"] = std::to_string(desc.render.frame);
   if (const AutoDecision* d = scene->autoDecision()) image.metadata["auto_decision"] = d->summary();
+  if (const SplitMap* split = renderer.adaptiveSplit()) image.metadata["adaptive_split"] = split->summary();
   image.metadata["rejected_samples"] = std::to_string(film.rejectedSamples());
   // A PNG is display-referred: the scene's exposure, or for an opened VDB one that shows the volume.
   float exposure = desc.display.exposure;
@@ -105,12 +106,15 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
     // preset per sample.
     const AutoDecision* decision = scene->autoDecision();
     const double work = renderer.work().cost() + (decision ? decision->pilotWork : 0.0);
-    const double samples = decision ? paths : static_cast<double>(renderer.work().samples);
+    // Per film sample: a split pixel's film sample is the mean of several camera samples, and its
+    // variance and its work are both per film sample (sample_allocation.h).
+    const double samples = paths;
     std::printf("%s: %dx%d, %d spp, strategy %s, load %.2f s, render %.2f s, %.3g samples/s, %llu rejected samples, "
                 "relative variance per sample %.4g, variance per sample %.4g, work per sample %.4g%s\n",
                 scenePath.c_str(), film.width(), film.height(), film.spp(), desc.strategy.preset.c_str(), loadSeconds, t,
                 paths / std::max(t, 1e-9), static_cast<unsigned long long>(film.rejectedSamples()), relativeVariancePerSample(film),
                 variancePerSample(film), work / std::max(1.0, samples), decision ? " (the pilot's included)" : "");
+    if (const SplitMap* split = renderer.adaptiveSplit()) std::printf("%s\n", split->summary().c_str());
     // Where the work went, per camera sample (CANDELA_VERBOSE): the counts work.h prices.
     if (std::getenv("CANDELA_VERBOSE")) {
       const WorkCounters& w = renderer.work();
@@ -458,6 +462,7 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
         points.push_back(p);
         std::printf("%-14s budget %7.2f s  time %7.2f s  spp %6d  mse %.4g  relmse %.4g\n", c.label.c_str(), budget, p.seconds, p.spp,
                     p.mse, p.relmse);
+        if (const SplitMap* split = renderers[i]->adaptiveSplit()) std::printf("  %s\n", split->summary().c_str());
         if (budget == times.back() && !sweepKey.empty())
           sweepPoints.push_back({c.strategy, sweepNumber(value), 1.0 / (p.relmse * p.seconds), c.note});
       }

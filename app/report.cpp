@@ -247,6 +247,8 @@ int runReport(bool quick, const std::string& dir, int threads) {
         if (budget != budgets.back()) continue;
         efficiencies[0].push_back(efficiencyOf(runs[p].strategy, r.error, r.seconds, r.work));
         runs[p].film = std::move(r.film), runs[p].seconds = r.seconds, runs[p].error = r.error;
+        if (const SplitMap* split = charted.renderers[p]->adaptiveSplit(); split && !runs[p].note.empty())
+          runs[p].note += "; seed " + std::to_string(kEfficiencySeeds[0]) + "'s " + split->summary();
         std::printf("report: %s %s: relMSE %.4g at %.2f s (%d spp)\n", name.c_str(), presets[p].c_str(), runs[p].error.relmse, runs[p].seconds,
                     runs[p].film.spp());
       }

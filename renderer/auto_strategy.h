@@ -97,6 +97,8 @@ inline constexpr float kAutoRelativeEmissionWeight = 10.0f;
 inline constexpr double kPilotSamples = 128.0 * 72.0 * 8.0;
 // How much more efficient than the plain candidate an elaborate one must be in the pilot.
 inline constexpr double kAutoMargin = 1.2;
+// Auto's StrategySettings::adaptive_split: the most camera samples per film sample in a block.
+inline constexpr int kAutoSplit = 8;
 
 // The settings `auto` starts from (before rules and pilot): conventional, named "auto".
 StrategySettings autoBaseStrategy();

@@ -146,6 +146,7 @@ void CameraGuides::resetMeasures() {
   const int blocksY = (height_ + kMeasureBlock - 1) / kMeasureBlock;
   if (measuring_) measures_.resize(static_cast<size_t>(blocksX_) * static_cast<size_t>(blocksY));
   measuredSamples_ = 0;
+  measuredCameraSamples_ = 0.0;
   measuredWork_ = 0.0;
   nextDecision_ = 16;
 }
@@ -160,9 +161,10 @@ namespace {
 double mixturePdf(double q, double guidedPdf, double trackedPdf) { return q * guidedPdf + (1.0 - q) * trackedPdf; }
 }  // namespace
 
-void CameraGuides::record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample) {
+void CameraGuides::record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample, double share) {
   BlockMeasure& m = measures_[block(x, y)];
-  m.samples += 1.0;
+  m.samples += share;
+  m.cameraSamples += 1.0;
   if (vertex.guidedDrawn) m.guided += 1.0, m.guidedWork += vertex.guidedWork;
   // No direct light: nothing changes with q (a non-finite sample the film rejects, and so does this).
   if (isBlack(vertex.direct) || !isFinite(vertex.direct) || !isFinite(sample)) return;
@@ -178,7 +180,8 @@ void CameraGuides::record(int x, int y, const PathTracer::CameraVertexRecord& ve
     const double ratio = pdf > 0.0 ? std::min(drawn / pdf, 1e6) : 1e6;
     // E[R D] under q': the vertex's technique reweighted from q to q'.
     const double technique = vertex.guidedDrawn ? (q > 0.0 ? other / q : 0.0) : (1.0 - other) / (1.0 - q);
-    for (int ch = 0; ch < 3; ++ch) m.change[c][ch] += d[ch] * d[ch] * (ratio - 1.0) + 2.0 * r[ch] * d[ch] * (ratio * technique - 1.0);
+    for (int ch = 0; ch < 3; ++ch)
+      m.change[c][ch] += share * share * (d[ch] * d[ch] * (ratio - 1.0) + 2.0 * r[ch] * d[ch] * (ratio * technique - 1.0));
   }
 }
 
@@ -206,12 +209,13 @@ double CameraGuides::measuredVarianceChange(size_t candidate) const {
   return change;
 }
 
-bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, double passWork) {
+bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, double passWork, double cameraSamples) {
   if (!measuring_ || measures_.empty()) return false;
   measuredSamples_ += spp;
+  measuredCameraSamples_ += cameraSamples;
   measuredWork_ += passWork;
-  if (measuredSamples_ < nextDecision_) return false;
-  nextDecision_ = 2 * measuredSamples_;
+  if (measuredCameraSamples_ < nextDecision_) return false;
+  nextDecision_ = 2.0 * measuredCameraSamples_;
   const GuidingSettings& g = scene.strategy().guiding;
   const double most = std::max(g.guided_probability, g.bright_pixel_probability);
   // The image's variance per sample, its relative variance (the relMSE's, per channel, eps = (0.1 x
@@ -255,7 +259,7 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
           blockVariance[ch] += pixelVariance(k), blockRelative[ch] += pixelVariance(k) * inverseSquare(k), blockInverse[ch] += inverseSquare(k);
         }
       }
-    if (!(pixels > 0.0) || !(m.samples >= 8.0 * pixels)) return;
+    if (!(pixels > 0.0) || !(m.cameraSamples >= 8.0 * pixels) || !(m.samples >= 2.0 * pixels)) return;
     const double perPixel = m.samples / pixels;  // samples per pixel: the sums become per sample, summed over pixels
     const double perGuided = m.guided > 0.0 ? m.guidedWork / m.guided : meanGuidedWork;
     float best = kMeasuredProbabilities[0];
@@ -263,7 +267,9 @@ bool CameraGuides::passFinished(const Scene& scene, const Film& film, int spp, d
     for (size_t c = 0; c < kMeasuredProbabilities.size(); ++c) {
       const double q = kMeasuredProbabilities[c];
       if (q > most + 1e-6) continue;
-      double score = 2.0 * (q * perGuided * pixels - m.guidedWork / perPixel) / work;
+      // Guided work per film sample: q per camera sample, of which a split pixel draws k per film sample.
+      const double cameraPerFilm = m.cameraSamples / m.samples;
+      double score = 2.0 * (q * perGuided * pixels * cameraPerFilm - m.guidedWork / perPixel) / work;
       for (int ch = 0; ch < 3; ++ch) {
         const double change = m.change[c][ch] / perPixel;
         const double toRelative = blockVariance[ch] > 0.0 ? blockRelative[ch] / blockVariance[ch] : blockInverse[ch] / pixels;

@@ -93,9 +93,13 @@ class CameraGuides {
   static constexpr std::array<float, 6> kMeasuredProbabilities{0.0f, 0.05f, 0.1f, 0.2f, 0.35f, 0.5f};
   static constexpr int kMeasureBlock = 8;
   bool measuring() const { return measuring_; }
-  void record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample);
+  // `share`: the camera sample's share of its film sample, 1 / k for one of a split pixel's k
+  // sub-samples (sample_allocation.h), whose film sample's variance is a k-th of theirs.
+  void record(int x, int y, const PathTracer::CameraVertexRecord& vertex, const Rgb& sample, double share = 1.0);
   void restart(const Scene& scene);
-  bool passFinished(const Scene& scene, const Film& film, int spp, double passWork);
+  // `cameraSamples`: the pass's camera samples per pixel (more than `spp` where pixels split), which
+  // time the decisions, so that a split render decides after as many camera samples as any other.
+  bool passFinished(const Scene& scene, const Film& film, int spp, double passWork, double cameraSamples);
   size_t measuredDecisions() const { return measuredDecisions_; }  // how many times passFinished set q
   // What the samples recorded since the last restart predict for kMeasuredProbabilities[candidate]
   // everywhere: the change of the image's variance per sample, summed over pixels and channels
@@ -121,7 +125,8 @@ class CameraGuides {
   // Sums over a block's recorded samples. D: the camera vertex's direct light; R: the rest of the
   // sample.
   struct BlockMeasure {
-    double samples = 0.0, guided = 0.0, guidedWork = 0.0;
+    double samples = 0.0, guided = 0.0, guidedWork = 0.0;  // film samples (a split pixel's k sub-samples make one)
+    double cameraSamples = 0.0;                            // camera samples, sub-samples each
     // Per channel: the change in the sum of the samples' squares that each candidate q' would
     // bring, (D p_q / p_q')^2-type terms less D^2 and twice the same for R D (see above).
     std::array<std::array<double, 3>, kMeasuredProbabilities.size()> change{};
@@ -129,7 +134,8 @@ class CameraGuides {
   std::vector<BlockMeasure> measures_;
   int blocksX_ = 0;
   bool measuring_ = false;
-  int measuredSamples_ = 0, nextDecision_ = 16;
+  int measuredSamples_ = 0;                             // film samples per pixel since the last restart
+  double measuredCameraSamples_ = 0.0, nextDecision_ = 16.0;  // camera samples per pixel
   double measuredWork_ = 0.0;  // the passes' work since the last restart
   size_t measuredDecisions_ = 0;
   void resetMeasures();

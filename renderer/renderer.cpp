@@ -1,5 +1,6 @@
 #include "renderer.h"
 
+
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -41,11 +42,18 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   // Its blocks must each lie inside one tile (one thread writes a block).
   const bool measure = cachedGuides && cameraGuides_.measuring() && options_.tileSize % CameraGuides::kMeasureBlock == 0;
   if (measure && film.spp() == 0) cameraGuides_.restart(*scene_);
+  // Adaptive sampling by splitting (sample_allocation.h): a fresh film starts unsplit, so that the
+  // same command gives the same image. The viewer's preview camera renders as it always has.
+  const int maxSplit = cameraOverride ? 1 : scene_->strategy().adaptive_split;
+  if (maxSplit > 1 && (film.spp() == 0 || split_.empty())) split_.reset(w, h);
+  const bool adaptive = maxSplit > 1;
+  const bool measuringSplit = adaptive && !split_.decided();  // the figures the decision reads
 
   // Each thread's work counters before and after its tiles: summed over the threads that ran them.
   tbb::enumerable_thread_specific<WorkCounters> passWork;
   auto renderTile = [&](int tile) {
     const WorkCounters before = threadWork();
+    uint64_t extraSamples = 0;  // split pixels' sub-samples beyond one per film sample
     const int x0 = (tile % tilesX) * options_.tileSize, y0 = (tile / tilesX) * options_.tileSize;
     const int x1 = std::min(w, x0 + options_.tileSize), y1 = std::min(h, y0 + options_.tileSize);
     for (int y = y0; y < y1; ++y)
@@ -58,20 +66,43 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
         if (cachedGuides && x + 1 < x1) __builtin_prefetch(cameraGuides_.at(x + 1, y));
         const uint64_t pixelKey = hashCombine(seed, static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x));
         const PixelSamplePositions positions(pixelKey);
-        for (int s = 0; s < spp; ++s) {
-          const uint64_t sampleIndex = static_cast<uint64_t>(firstSample + s);
-          Rng rng(hashCombine(pixelKey, sampleIndex), pixelKey);
-          const Vec2 position = positions(sampleIndex);
+        const size_t pixel = static_cast<size_t>(y) * w + x;
+        const double costBefore = measuringSplit ? threadWork().cost() : 0.0;
+        const int split = adaptive ? split_.split(pixel) : 1;
+        auto sample = [&](uint64_t streamIndex, uint64_t positionIndex, double share) {
+          Rng rng(hashCombine(pixelKey, streamIndex), pixelKey);
+          const Vec2 position = positions(positionIndex);
           const Ray ray = camera.generate(static_cast<float>(x) + position.x, static_cast<float>(y) + position.y);
           PathTracer::CameraVertexRecord record;
           const Rgb value = tracer.radiance(ray, cachedGuides ? cameraGuides_.at(x, y) : nullptr, rng, measure ? &record : nullptr);
-          pass.addSample(x, y, value);
-          if (record.table) cameraGuides_.record(x, y, record, value);
+          if (record.table) cameraGuides_.record(x, y, record, value, share);
+          if (measuringSplit && Film::acceptable(value)) split_.addCameraSample(pixel, streamIndex, value);
+          return value;
+        };
+        for (int s = 0; s < spp; ++s) {
+          const uint64_t sampleIndex = static_cast<uint64_t>(firstSample + s);
+          if (split == 1) {
+            pass.addSample(x, y, sample(sampleIndex, adaptive ? split_.nextPosition(pixel, sampleIndex) : sampleIndex, 1.0));
+            continue;
+          }
+          // A film sample of a split pixel: the mean of its sub-samples, a rejected one counted and
+          // taken as 0 (as the film takes a rejected sample), so the mean stays normalised.
+          Rgb total(0.0f);
+          for (int j = 0; j < split; ++j) {
+            // Random numbers of their own; positions that continue the pixel's R2 sequence
+            // (sample_allocation.h), so the sub-samples stay stratified over the pixel.
+            const Rgb value = sample(AdaptiveSplit::subSampleStream(sampleIndex, j), split_.nextPosition(pixel, sampleIndex), 1.0 / split);
+            if (Film::acceptable(value)) total += value;
+            else pass.countRejected(y);
+          }
+          pass.addSample(x, y, total / static_cast<float>(split));
         }
+        if (measuringSplit) split_.addCost(pixel, static_cast<float>(threadWork().cost() - costBefore));
+        extraSamples += static_cast<uint64_t>(split - 1) * static_cast<uint64_t>(spp);
       }
     WorkCounters& mine = passWork.local();
     mine += threadWork() - before;
-    mine.samples += static_cast<uint64_t>(x1 - x0) * static_cast<uint64_t>(y1 - y0) * static_cast<uint64_t>(spp);
+    mine.samples += static_cast<uint64_t>(x1 - x0) * static_cast<uint64_t>(y1 - y0) * static_cast<uint64_t>(spp) + extraSamples;
   };
   const int tiles = tilesX * tilesY;
   auto run = [&] {
@@ -94,7 +125,8 @@ bool ProgressiveRenderer::renderPass(Film& film, int spp, const std::atomic<bool
   WorkCounters passTotal;
   for (const WorkCounters& w : passWork) passTotal += w;
   work_ += passTotal;
-  if (measure) cameraGuides_.passFinished(*scene_, film, spp, passTotal.cost());
+  if (measure) cameraGuides_.passFinished(*scene_, film, spp, passTotal.cost(), static_cast<double>(passTotal.samples) / (static_cast<double>(w) * h));
+  if (adaptive) split_.passFinished(film, maxSplit, static_cast<uint64_t>(options_.firstSample + film.spp()));
   return true;
 }
 

@@ -5,6 +5,7 @@
 // whatever the thread count or tile schedule.
 #pragma once
 
+#include "sample_allocation.h"
 #include "work.h"
 
 #include "camera_guides.h"
@@ -81,6 +82,8 @@ class ProgressiveRenderer {
   // The work of every pass rendered so far (work.h): counted, so the same on any machine.
   const WorkCounters& work() const { return work_; }
   const CameraGuides& cameraGuides() const { return cameraGuides_; }
+  // The adaptive split of the current film (StrategySettings::adaptive_split), once decided.
+  const SplitMap* adaptiveSplit() const { return split_.map(); }
 
  private:
   std::shared_ptr<const Scene> scene_;
@@ -91,6 +94,9 @@ class ProgressiveRenderer {
   // samples of a 1-spp-pass bench on fire at 240 x 240.
   Film pass_;
   WorkCounters work_;
+  // Adaptive sampling by splitting (StrategySettings::adaptive_split): the current film's figures
+  // and split.
+  AdaptiveSplit split_;
 };
 
 // One strategy's render in an equal-time comparison (bench, report).

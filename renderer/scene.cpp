@@ -227,7 +227,10 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
       throw InputError(desc.path + ": volumes." + std::to_string(i) + ".emission.intensity: the emitted power is not finite");
   // The film and its per-pixel tables, before any of them is allocated.
   const auto [width, height] = desc.camera.resolution;
-  checkMemoryBudget(static_cast<double>(width) * height * (desc.strategy.guiding.guide == DistanceGuide::None ? 64.0 : 320.0),
+  // Auto may choose probes; adaptive sampling keeps per-pixel figures (sample_allocation.h).
+  const bool mayGuide = desc.strategy.guiding.guide != DistanceGuide::None || desc.strategy.preset == "auto";
+  const bool adaptive = desc.strategy.adaptive_split > 1 || desc.strategy.preset == "auto";
+  checkMemoryBudget(static_cast<double>(width) * height * ((mayGuide ? 320.0 : 64.0) + (adaptive ? 32.0 : 0.0)),
                     desc.path + ": camera.resolution", "an image of " + std::to_string(width) + " x " + std::to_string(height));
   scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
   if (desc.strategy.guiding.guide == DistanceGuide::Probes) {

@@ -277,6 +277,7 @@ struct StrategySettings {
   EmissionSettings emission;
   GuidingSettings guiding;
   int russian_roulette_depth = 3;  // scattering events before Russian roulette may end a path
+  int adaptive_split = 1;          // most camera samples per film sample in a noisy block; 1: off
 
   template <class V>
   void visit(V& v) {
@@ -287,6 +288,11 @@ struct StrategySettings {
     v.object("emission", emission, "Emission sampling: gathering at every collision and emissive volumes as lights");
     v.object("guiding", guiding, "Scattering distance sampling: probe guiding or equi-angular, with MIS");
     v.field("russian_roulette_depth", russian_roulette_depth, "Scattering events before Russian roulette may end a path (unbiased)", Range{0, 100000});
+    v.field("adaptive_split", adaptive_split,
+            "Adaptive sampling: after the first 4 samples per pixel, each 8 x 8 block renders up to this many camera samples "
+            "per film sample, as many as its measured noise per unit of work calls for, and the film keeps their mean. "
+            "The image is unchanged; 1: every pixel one",
+            Range{1, 16});
   }
 };
 

@@ -223,6 +223,7 @@ void RenderSession::workerLoop() {
     frame->seconds = seconds;
     frame->scene = std::make_shared<const SceneDesc>(scene->desc());
     if (const AutoDecision* d = scene->autoDecision()) frame->autoDecision = d->summary(), frame->autoChoice = d->label();
+    if (const SplitMap* split = renderer ? renderer->adaptiveSplit() : nullptr) frame->adaptiveSplit = split->summary(), frame->meanSplit = split->meanSplit;
     frame->sceneCenter = scene->center();
     frame->sceneRadius = scene->radius();
     return frame;

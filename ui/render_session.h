@@ -40,6 +40,8 @@ struct Frame {
   std::shared_ptr<const SceneDesc> scene;  // the settings this frame was rendered with
   std::string autoDecision;  // with the auto strategy: what it chose and why (AutoDecision::summary)
   std::string autoChoice;    // ... and the candidate's name
+  std::string adaptiveSplit;  // adaptive sampling's split once decided (SplitMap::summary), else empty
+  double meanSplit = 1.0;     // ... its camera samples per film sample, over the pixels
   Vec3 sceneCenter{0.0f};   // bounds of the scene's content, for framing the camera
   float sceneRadius = 1.0f;
 };

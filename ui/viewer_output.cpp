@@ -117,6 +117,7 @@ bool Viewer::screenshot(const std::string& requestedPath) {
     addComparisonMetadata(meta);
     if (!importSummary_.empty()) meta["opened_volume"] = importSummary_;
     if (!frame_->autoDecision.empty()) meta["auto_decision"] = frame_->autoDecision;
+    if (!frame_->adaptiveSplit.empty()) meta["adaptive_split"] = frame_->adaptiveSplit;
     if (frame_->scene) {
       meta["strategy"] = toJson(frame_->scene->strategy).dump();
       SceneDesc shown = *frame_->scene;

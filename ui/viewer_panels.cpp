@@ -264,6 +264,11 @@ void Viewer::drawPanel() {
       ImGui::TextWrapped("%s", frame_->autoDecision.c_str());
       ImGui::PopStyleColor();
     }
+    if (frame_ && !frame_->adaptiveSplit.empty()) {
+      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.6f, 0.85f, 1.0f, 1.0f));
+      ImGui::TextWrapped("%s", frame_->adaptiveSplit.c_str());
+      ImGui::PopStyleColor();
+    }
     edited_.strategy.visit(editor);
     if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
     changed |= editor.changed;
@@ -338,10 +343,12 @@ void Viewer::drawStatusBar() {
     const Film& film = frame_->film;
     char latency[32] = "-";
     if (!latencies_.empty()) std::snprintf(latency, sizeof(latency), "%.0f ms", lastLatencyMs_);
-    ImGui::Text("%s%s | %s | %dx%d | %d spp%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %s | UI %.0f fps%s",
+    char split[48] = "";
+    if (!frame_->preview && frame_->meanSplit > 1.0) std::snprintf(split, sizeof(split), " (adaptive: x%.2f camera samples)", frame_->meanSplit);
+    ImGui::Text("%s%s | %s | %dx%d | %d spp%s%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %s | UI %.0f fps%s",
                 dirty_ ? "* " : "", (documentPath_.empty() ? scenePath_ : documentPath_).c_str(),
                 frame_->scene ? (frame_->autoChoice.empty() ? frame_->scene->strategy.preset : "auto: " + frame_->autoChoice).c_str() : "", frame_->width, frame_->height,
-                frame_->preview ? 0 : film.spp(), frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
+                frame_->preview ? 0 : film.spp(), split, frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
                 frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
                 session_.loading() ? " | loading..." : "");
     if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) {
