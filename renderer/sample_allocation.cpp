@@ -82,11 +82,20 @@ SplitMap AdaptiveSplit::decide(const Film& film, const Halves& sumSquares, const
       }
     return out;
   };
+  // The splits are drawn from smoothed figures and scored by raw ones: smoothing lends a calm block
+  // beside a noisy one some of its variance, and a block that is nearly free (the background a
+  // camera ray meets nothing in) would then look worth splitting. Scored by its own figures it is
+  // not (huge-sparse's sky: 45% of the pixels split, for no less variance and 6% more work).
+  std::array<Figures, 2> raw = halves;
   Figures both;
   both.absVar.assign(blocks, 0.0), both.relVar.assign(blocks, 0.0);
-  for (Figures& f : halves) {
+  for (int half = 0; half < 2; ++half) {
+    Figures& f = halves[half];
     f.absVar = smoothed(f.absVar), f.relVar = smoothed(f.relVar);
-    for (size_t b = 0; b < blocks; ++b) f.absTotal += f.absVar[b], f.relTotal += f.relVar[b];
+    for (size_t b = 0; b < blocks; ++b) {
+      f.absTotal += f.absVar[b], f.relTotal += f.relVar[b];
+      raw[half].absTotal += raw[half].absVar[b], raw[half].relTotal += raw[half].relVar[b];
+    }
     if (!(f.absTotal > 0.0) || !(f.relTotal > 0.0)) return {};
     for (size_t b = 0; b < blocks; ++b) both.absVar[b] += 0.5 * f.absVar[b], both.relVar[b] += 0.5 * f.relVar[b];
   }
@@ -138,8 +147,8 @@ SplitMap AdaptiveSplit::decide(const Film& film, const Halves& sumSquares, const
       const double alpha = a / 10.0;
       if (!splitOf(halves[0], alpha, step, fromA) || !splitOf(halves[1], alpha, step, fromB) || !splitOf(both, alpha, step, fromBoth)) continue;
       double absAB, relAB, absBA, relBA, work, unused;
-      gains(halves[1], fromA, absAB, relAB, unused);
-      gains(halves[0], fromB, absBA, relBA, unused);
+      gains(raw[1], fromA, absAB, relAB, unused);
+      gains(raw[0], fromB, absBA, relBA, unused);
       gains(both, fromBoth, unused, unused, work);
       const double absGain = 0.5 * (absAB + absBA), relGain = 0.5 * (relAB + relBA);
       candidates.push_back({alpha, step, std::min(absGain, relGain), absGain, relGain, work});
