@@ -230,7 +230,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
   // Auto may choose probes; adaptive sampling keeps per-pixel figures (sample_allocation.h).
   const bool mayGuide = desc.strategy.guiding.guide != DistanceGuide::None || desc.strategy.preset == "auto";
   const bool adaptive = desc.strategy.adaptive_split > 1 || desc.strategy.preset == "auto";
-  checkMemoryBudget(static_cast<double>(width) * height * ((mayGuide ? 320.0 : 64.0) + (adaptive ? 32.0 : 0.0)),
+  checkMemoryBudget(static_cast<double>(width) * height * ((mayGuide ? 320.0 : 64.0) + (adaptive ? 48.0 : 0.0)),
                     desc.path + ": camera.resolution", "an image of " + std::to_string(width) + " x " + std::to_string(height));
   scene->surfaces_ = std::make_unique<Surfaces>(desc.surfaces);
   if (desc.strategy.guiding.guide == DistanceGuide::Probes) {
