@@ -17,8 +17,8 @@
 namespace candela {
 namespace {
 
-// A 64 x 32 film (8 x 4 blocks) of 4 samples per pixel whose figures the test writes itself: every
-// pixel reads 1 +- `noise(block)`, each camera sample costing `cost(block)`.
+// A 64 x 32 film (8 x 4 blocks) of 4 samples per pixel whose figures the test writes itself:
+// `value(block, sample, x, y)` gives each sample, `cost(block)` what each camera sample cost.
 struct SyntheticFilm {
   static constexpr int kWidth = 64, kHeight = 32, kSamples = 4;
   Film film{kWidth, kHeight};
@@ -26,9 +26,8 @@ struct SyntheticFilm {
   AdaptiveSplit::Halves count{std::vector<float>(kWidth * kHeight, 0.0f), std::vector<float>(kWidth * kHeight, 0.0f)};
   std::vector<float> cost = std::vector<float>(kWidth * kHeight, 0.0f);
 
-  // `noise(block, sample, x, y)` gives the sample's value.
   template <class Value, class Cost>
-  SyntheticFilm(Value value, Cost costOf, bool) {
+  SyntheticFilm(Value value, Cost costOf) {
     for (int s = 0; s < kSamples; ++s) {
       Film pass(kWidth, kHeight);
       for (int y = 0; y < kHeight; ++y)
@@ -45,30 +44,18 @@ struct SyntheticFilm {
       film.addPass(pass);
     }
   }
-  template <class Noise, class Cost>
-  SyntheticFilm(Noise noise, Cost costOf) {
-    for (int s = 0; s < kSamples; ++s) {
-      Film pass(kWidth, kHeight);
-      for (int y = 0; y < kHeight; ++y)
-        for (int x = 0; x < kWidth; ++x) {
-          const int block = (y / AdaptiveSplit::kBlock) * (kWidth / AdaptiveSplit::kBlock) + x / AdaptiveSplit::kBlock;
-          const float v = 1.0f + ((s + x + y) % 2 == 0 ? 1.0f : -1.0f) * noise(block);
-          pass.addSample(x, y, Rgb(v));
-          const size_t p = static_cast<size_t>(y) * kWidth + x;
-          for (int c = 0; c < 3; ++c) sumSquares[s & 1][3 * p + c] += v * v;
-          count[s & 1][p] += 1.0f;
-          cost[p] += costOf(block);
-        }
-      pass.setPassSpp(1);
-      film.addPass(pass);
-    }
-  }
   int splitAt(const SplitMap& m, int x, int y) const { return m.split.empty() ? 1 : m.split[static_cast<size_t>(y) * kWidth + x]; }
 };
 
+// Every pixel reads 1 +- noise(block), the sign alternating over pixels and samples.
+template <class Noise>
+auto plusMinus(Noise noise) {
+  return [noise](int block, int s, int x, int y) { return 1.0f + ((s + x + y) % 2 == 0 ? 1.0f : -1.0f) * noise(block); };
+}
+
 TEST(AdaptiveSplit, TheNoisyBlockTakesMoreSamplesAndTheCalmOnesKeepOne) {
   // Block 21 (x 40-47, y 16-23) is noisy.
-  const SyntheticFilm f([](int block) { return block == 21 ? 0.9f : 0.05f; }, [](int) { return 100.0f; });
+  const SyntheticFilm f(plusMinus([](int block) { return block == 21 ? 0.9f : 0.05f; }), [](int) { return 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
   ASSERT_FALSE(m.split.empty()) << m.summary();
   EXPECT_GT(f.splitAt(m, 43, 19), 1) << m.summary();
@@ -82,14 +69,15 @@ TEST(AdaptiveSplit, ABlockWhoseSamplesCostMoreTakesFewer) {
   // Two equally noisy blocks, one four times as costly per sample: sqrt(variance / cost) gives it
   // half the samples of the other (or, where the near-best split of least work is kept, none).
   // Blocks 9 (x 8-15, y 8-15) and 13 (x 40-47, y 8-15) are noisy; 13's samples cost four times as much.
-  const SyntheticFilm f([](int block) { return block == 9 || block == 13 ? 0.9f : 0.05f; }, [](int block) { return block == 13 ? 400.0f : 100.0f; });
+  const SyntheticFilm f(plusMinus([](int block) { return block == 9 || block == 13 ? 0.9f : 0.05f; }),
+                       [](int block) { return block == 13 ? 400.0f : 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 16);
   ASSERT_FALSE(m.split.empty()) << m.summary();
   EXPECT_GT(f.splitAt(m, 12, 12), f.splitAt(m, 44, 12)) << m.summary();
 }
 
 TEST(AdaptiveSplit, EvenNoiseGivesNoSplit) {
-  const SyntheticFilm f([](int) { return 0.5f; }, [](int) { return 100.0f; });
+  const SyntheticFilm f(plusMinus([](int) { return 0.5f; }), [](int) { return 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
   EXPECT_TRUE(m.split.empty()) << m.summary();
   EXPECT_NE(m.summary().find("none"), std::string::npos);
@@ -104,7 +92,7 @@ TEST(AdaptiveSplit, RareBrightSamplesSpreadEvenlyGiveNoSplit) {
         Rng rng(hashCombine(static_cast<uint64_t>(y * 64 + x), static_cast<uint64_t>(s)), 3);
         return rng.uniform() < 0.05f ? 40.0f : 1.0f;
       },
-      [](int) { return 100.0f; }, true);
+      [](int) { return 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
   EXPECT_TRUE(m.split.empty()) << m.summary();
 }
