@@ -211,9 +211,7 @@ AutoDecision resolveAutoStrategy(Scene& scene) {
   // Whatever it chose, auto samples adaptively: blocks whose noise per unit of work is high take
   // up to kAutoSplit camera samples per film sample, decided by the render's own samples
   // (sample_allocation.h; docs/performance.md, "Adaptive sampling by splitting").
-  StrategySettings chosen = scene.strategy();
-  chosen.adaptive_split = kAutoSplit;
-  scene.setStrategy(chosen);
+  scene.setAdaptiveSplit(kAutoSplit);
   d.reasons.push_back("adaptive sampling: up to " + std::to_string(kAutoSplit) +
                       " camera samples per film sample where a block's noise per unit of work calls for them (from 4 camera samples per pixel)");
   d.pilotSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -52,10 +52,11 @@ class Film {
 
   // Adds a finished pass of `spp` samples per pixel (the renderer's pass buffer).
   void addPass(const Film& pass);
-  // Adds one sample to pixel (x, y) of a pass buffer; returns false (and counts it) if rejected.
+  // What the film accepts: finite, non-negative values.
   static bool acceptable(const Rgb& value) { return isFinite(value) && value.r >= 0.0f && value.g >= 0.0f && value.b >= 0.0f; }
   // Counts a rejected sample of row y that is not added on its own (a split pixel's sub-sample).
   void countRejected(int y) { ++rejectedLocal(y); }
+  // Adds one sample to pixel (x, y) of a pass buffer; returns false (and counts it) if rejected.
   bool addSample(int x, int y, const Rgb& value) {
     const size_t i = 3 * (static_cast<size_t>(y) * width_ + x);
     if (!acceptable(value)) {

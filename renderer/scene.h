@@ -82,6 +82,9 @@ class Scene {
   // Applies new strategy settings, rebuilding only what depends on them (majorants, emission
   // grids, light selection; probes are learned when probe guiding turns on or its settings change).
   void setStrategy(const StrategySettings& strategy);
+  // Only the adaptive split (StrategySettings::adaptive_split): nothing the scene built depends on
+  // it, the renderer reads it per pass.
+  void setAdaptiveSplit(int maxSplit) { desc_.strategy.adaptive_split = maxSplit; }
   // setStrategy, or for the preset "auto" as chosen (not yet decided here) the auto strategy's
   // decision (auto_strategy.h). What the viewer and every build call.
   void applyStrategy(const StrategySettings& strategy);
