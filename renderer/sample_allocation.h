@@ -48,7 +48,7 @@ class AdaptiveSplit {
 
   // Forgets everything: a fresh film (or a new size).
   void reset(int width, int height);
-  bool empty() const { return count_[0].empty(); }
+  bool empty() const { return width_ == 0; }
   bool decided() const { return decided_; }
   // k of pixel p for this pass (1 before the first split and where none is called for).
   int split(size_t p) const { return map_.split.empty() ? 1 : map_.split[p]; }
