@@ -96,7 +96,8 @@ SplitMap AdaptiveSplit::decide(const Film& film, const Halves& sumSquares, const
       f.absTotal += f.absVar[b], f.relTotal += f.relVar[b];
       raw[half].absTotal += raw[half].absVar[b], raw[half].relTotal += raw[half].relVar[b];
     }
-    if (!(f.absTotal > 0.0) || !(f.relTotal > 0.0)) return {};
+    // Samples so bright that their squares overflow float leave nothing to split by.
+    if (!(f.absTotal > 0.0) || !(f.relTotal > 0.0) || !std::isfinite(f.absTotal) || !std::isfinite(f.relTotal)) return {};
     for (size_t b = 0; b < blocks; ++b) both.absVar[b] += 0.5 * f.absVar[b], both.relVar[b] += 0.5 * f.relVar[b];
   }
   both.absTotal = 0.5 * (halves[0].absTotal + halves[1].absTotal), both.relTotal = 0.5 * (halves[0].relTotal + halves[1].relTotal);

@@ -97,6 +97,12 @@ TEST(AdaptiveSplit, RareBrightSamplesSpreadEvenlyGiveNoSplit) {
   EXPECT_TRUE(m.split.empty()) << m.summary();
 }
 
+TEST(AdaptiveSplit, SamplesWhoseSquaresOverflowGiveNoSplit) {
+  const SyntheticFilm f([](int block, int s, int, int) { return block == 3 && s == 0 ? 1e30f : 1.0f; }, [](int) { return 100.0f; });
+  const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
+  EXPECT_TRUE(m.split.empty()) << m.summary();
+}
+
 // Fire at 96 x 96: the flame's pixels are noisy and costly, the smoke's and the black background's
 // calm, so the render splits.
 SceneDesc splitFire(int split) {
