@@ -1,6 +1,5 @@
 #include "renderer.h"
 
-
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/enumerable_thread_specific.h>

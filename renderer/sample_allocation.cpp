@@ -1,5 +1,6 @@
 #include "sample_allocation.h"
 
+#include "convergence.h"
 #include "film.h"
 
 #include <algorithm>
@@ -30,7 +31,7 @@ SplitMap AdaptiveSplit::decide(const Film& film, const Halves& sumSquares, const
   double imageMean = 0.0;
   for (float s : sum) imageMean += s;
   imageMean /= static_cast<double>(sum.size()) * n;
-  const double eps = (0.1 * imageMean) * (0.1 * imageMean) + 1e-30;  // the relMSE's (convergence.h)
+  const double eps = relativeEpsilon(imageMean);  // the relMSE's
 
   // Per block and per half of the samples (even and odd film samples): the pixels' variance per
   // camera sample, absolute and relative, about the film's mean (the pixel's value, whatever k its
@@ -183,7 +184,7 @@ SplitMap AdaptiveSplit::decide(const Film& film, const Halves& sumSquares, const
 }
 
 void AdaptiveSplit::reset(int width, int height) {
-  width_ = width, height_ = height;
+  width_ = width;
   const size_t pixels = static_cast<size_t>(width) * height;
   for (int half = 0; half < 2; ++half) sumSquares_[half].assign(3 * pixels, 0.0f), count_[half].assign(pixels, 0.0f);
   cost_.assign(pixels, 0.0f);

@@ -30,8 +30,9 @@ struct SplitMap {
 // equally (that keeps it unbiased), so a film sample of k sub-samples counts as much as one of one,
 // and a k that changed during the render would give the samples with less variance too little
 // weight. A pixel that goes from 1 to k = 8 halfway through gets the variance of 227 camera
-// samples from 576, so a later, better-informed decision lost more than it won. Per 8 x 8 block: its pixels' variance per camera sample, absolute and relative to
-// the image (the report's MSE and relMSE; a pixel's mean is the film's), and its work per camera
+// samples from 576, so a later, better-informed decision lost more than it won.
+//
+// Per 8 x 8 block: its pixels' variance per camera sample, absolute and relative to the image (the report's MSE and relMSE; a pixel's mean is the film's), and its work per camera
 // sample (work.h's cost). k is proportional to sqrt(variance / work), the allocation that
 // minimises variance x work, for a variance that weighs the two metrics by alpha and 1 - alpha;
 // the split kept is the one of least work whose predicted gain, by the worse of the two metrics,
@@ -83,7 +84,7 @@ class AdaptiveSplit {
   static constexpr double kNearBest = 0.9;     // kept: the least work among splits within this of the best gain
 
  private:
-  int width_ = 0, height_ = 0;
+  int width_ = 0;  // 0: nothing measured yet
   Halves sumSquares_, count_;
   std::vector<float> cost_;
   std::vector<uint64_t> positions_;
