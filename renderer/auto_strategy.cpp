@@ -104,7 +104,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   }
   const float maxDepth = base.guiding.max_optical_depth;
   const double share = thinRayShare(scene, maxDepth);
-  char why[160];
+  char why[256];
   if (share < 0.5) {
     std::snprintf(why, sizeof(why), "%.0f%% of camera rays through the media are thinner than %.0f optical depths: no probes", 100.0 * share,
                   maxDepth);
@@ -133,21 +133,30 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
                       ": guided candidates guide the thin rays leaving a medium vertex too");
   out.push_back({"full", full});
   // Where volumes emit, full (the guided vertex on one camera segment in ten) stands and runs
-  // without a pilot, unless the flames are the only concentrated light of a medium that
-  // emits nothing (below). Its gain is in rare tracked vertices (dim smoke scattering a hot core's
+  // without a pilot, unless the flames light a medium that emits nothing and is too thick for
+  // single scattering to make its glow (below). Its gain is in rare tracked vertices (dim smoke scattering a hot core's
   // light, haze beside a sun's shafts) whose weight the guided density bounds: an 8-spp pilot
   // seldom draws them (fire: emission 0.20 against full 0.18 per sample at 8 spp, 1.19 against 0.62
   // at 64; shed-fire's region map x0.74 of emission by relMSE in the pilot, x2.15 of the best preset
   // in the bench), while nine seeds of the bench at 8 s put full x1.35 ahead of emission by relMSE
   // and x0.94 by MSE on fire.
   // Where a medium that emits nothing scatters the flames' light and no sun shines into it (a torch
-  // in mist or fog), the plain candidate stands, as the pilot says: nine seeds put full x0.89 /
-  // x0.81 of emission on torch-in-mist and x0.95 / x0.90 on torch-in-fog by time
-  // (docs/performance.md, "The guided vertex reuses the tracked walk's collisions").
+  // in mist or fog), it depends on how thin the medium is. Where most camera rays cross less than
+  // one optical depth (torch-in-mist: 97%), single scattering makes the halo, which is what the
+  // guided vertex samples, and full stands: once the adaptive split has taken the flame core's MSE,
+  // which both share, relMSE ranks them, and over nine seeds auto read x0.97 of each seed's better
+  // preset by relMSE with full and x0.92 with emission (docs/performance.md, "A split for one
+  // metric"). Where they cross more (torch-in-fog: none; glow-box: 27%), tracking alone scatters
+  // often, full read x0.91 of emission by relMSE with the same split, and the plain candidate
+  // stands, as the pilot says.
   bool plainScatterer = false;
   for (const Medium* m : scene.media().media) plainScatterer |= !m->emissive() && m->albedoAverage() > 0.0f;
-  if (emissive && plainScatterer && !sunLit) {
-    reasons.push_back("the volumes light a medium that emits nothing, and no sun shines: emission stands");
+  const double singleScatteringShare = emissive && plainScatterer && !sunLit ? thinRayShare(scene, 1.0f) : 0.0;
+  if (emissive && plainScatterer && !sunLit && singleScatteringShare < 0.5) {
+    std::snprintf(why, sizeof(why),
+                  "the volumes light a medium that emits nothing, no sun shines, and %.0f%% of camera rays cross less than one optical depth: "
+                  "emission stands", 100.0 * singleScatteringShare);
+    reasons.push_back(why);
   } else if (emissive) {
     // Where full stands, the pilot only ever risked overturning it: it chose full on all 18 seeds of
     // fire, shed-fire and thin-bright-fire and on every emissive stability case, and without its q
@@ -157,8 +166,13 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     // "No pilot where full stands").
     out.erase(out.begin());
     out.front().standing = true;
-    reasons.push_back(std::string(sunLit ? "volumes emit under a sun" : "only the emitting volumes scatter") +
-                      ": full stands, no pilot (the pilot cannot see its gain, in samples too rare for a few per pixel)");
+    std::string where = sunLit ? "volumes emit under a sun" : "only the emitting volumes scatter";
+    if (plainScatterer && !sunLit) {
+      std::snprintf(why, sizeof(why), "the volumes light a thin medium that emits nothing (%.0f%% of camera rays cross less than one optical depth)",
+                    100.0 * singleScatteringShare);
+      where = why;
+    }
+    reasons.push_back(where + ": full stands, no pilot (the pilot cannot see its gain, in samples too rare for a few per pixel)");
     return out;
   }
   // Full measures each pixel block's q from its own samples (guiding.measured_pixel_probability, as

@@ -20,6 +20,7 @@ struct SplitMap {
   std::vector<uint8_t> split;                        // per pixel; empty: one camera sample everywhere
   double predictedMse = 1.0, predictedRelMse = 1.0;  // efficiency over no split, by MSE and relMSE x work
   double meanSplit = 1.0, splitShare = 0.0;          // mean k over the pixels; share of pixels with k > 1
+  bool oneSided = false;  // kept for one metric's gain (AdaptiveSplit::kOneSidedGain), the other's near level
   int decidedAt = 0;                                 // camera samples per pixel it was measured on
   std::string summary() const;
 };
@@ -40,6 +41,13 @@ struct SplitMap {
 // the split one half of the samples calls for, scored by the other half's figures, since a split
 // fitted to the same samples it is scored on finds gains in their noise (on the cloud, x1.2
 // predicted that way measured x0.8).
+//
+// Failing that, a split for one metric: a small bright region (a torch's flame core, 1-2% of the
+// pixels) can carry most of the image's MSE and little of its relMSE, so that any split gains the
+// one and loses a little of the other. Such a split is kept when it predicts x1.5 or more by one
+// metric and no worse than x0.98 by the other, and adds at most 2% to the work per film sample: the
+// other metric loses about what the work adds, and the prediction of that loss erred by about 3% on
+// the low side (docs/performance.md, "A split for one metric").
 class AdaptiveSplit {
  public:
   static constexpr int kBlock = 8;       // pixels along each side of a block that shares one k
@@ -82,6 +90,12 @@ class AdaptiveSplit {
   static SplitMap decide(const Film& film, const Halves& sumSquares, const Halves& count, const std::vector<float>& cost, int maxSplit);
   static constexpr double kMinimumGain = 1.1;  // the cross-validated gain a split must predict
   static constexpr double kNearBest = 0.9;     // kept: the least work among splits within this of the best gain
+  // A split for one metric, where no split gains kMinimumGain by both: the largest gain by one metric
+  // among the splits that predict at least kOneSidedGain by it and kOneSidedFloor by the other,
+  // and cost at most kOneSidedWork times the work per film sample.
+  static constexpr double kOneSidedGain = 1.5;
+  static constexpr double kOneSidedFloor = 0.98;
+  static constexpr double kOneSidedWork = 1.02;
 
  private:
   int width_ = 0;  // 0: nothing measured yet

@@ -97,6 +97,37 @@ TEST(AdaptiveSplit, RareBrightSamplesSpreadEvenlyGiveNoSplit) {
   EXPECT_TRUE(m.split.empty()) << m.summary();
 }
 
+TEST(AdaptiveSplit, ASmallBrightCoreSplitsForMseAlone) {
+  // Block 21 (x 40-47, y 16-23) reads 20 +- 18, every other block 1 +- 0.9: any split loses a little
+  // relMSE, and two camera samples in that one block halve most of the MSE. Its samples cost 40,
+  // the others' 100, so that they add 1.3% to the work (kOneSidedWork).
+  const SyntheticFilm f([](int block, int s, int x, int y) { return (block == 21 ? 20.0f : 1.0f) * (1.0f + ((s + x + y) % 2 == 0 ? 0.9f : -0.9f)); },
+                        [](int block) { return block == 21 ? 40.0f : 100.0f; });
+  const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
+  ASSERT_FALSE(m.split.empty()) << m.summary();
+  EXPECT_TRUE(m.oneSided);
+  EXPECT_GT(f.splitAt(m, 43, 19), 1) << m.summary();
+  EXPECT_EQ(f.splitAt(m, 0, 0), 1) << m.summary();
+  EXPECT_GE(m.predictedMse, AdaptiveSplit::kOneSidedGain) << m.summary();
+  EXPECT_GE(m.predictedRelMse, AdaptiveSplit::kOneSidedFloor) << m.summary();
+  EXPECT_LT(m.predictedRelMse, AdaptiveSplit::kMinimumGain) << m.summary();
+  EXPECT_DOUBLE_EQ(m.splitShare, 1.0 / 32.0) << m.summary();  // that block alone
+  EXPECT_NE(m.summary().find("MSE alone"), std::string::npos) << m.summary();
+}
+
+TEST(AdaptiveSplit, ABrightRegionTooLargeForAOneMetricSplitKeepsOne) {
+  // A quarter of the blocks read 20 +- 18, the others 1 +- 0.6: two camera samples in the bright
+  // blocks predict far less MSE and about as much relMSE (x1.02), but cost 25% more work, more than
+  // kOneSidedWork allows, which bounds what relMSE could lose if the prediction were wrong.
+  const SyntheticFilm f([](int block, int s, int x, int y) {
+        const bool bright = block % 4 == 1;
+        return (bright ? 20.0f : 1.0f) * (1.0f + ((s + x + y) % 2 == 0 ? 1.0f : -1.0f) * (bright ? 0.9f : 0.6f));
+      },
+                        [](int) { return 100.0f; });
+  const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
+  EXPECT_TRUE(m.split.empty()) << m.summary();
+}
+
 TEST(AdaptiveSplit, SamplesWhoseSquaresOverflowGiveNoSplit) {
   const SyntheticFilm f([](int block, int s, int, int) { return block == 3 && s == 0 ? 1e30f : 1.0f; }, [](int) { return 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
