@@ -134,12 +134,12 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   out.push_back({"full", full});
   // Where volumes emit, full (the guided vertex on one camera segment in ten) stands and runs
   // without a pilot, unless the flames light a medium that emits nothing and is too thick for
-  // single scattering to make its glow (below). Its gain is in rare tracked vertices (dim smoke scattering a hot core's
-  // light, haze beside a sun's shafts) whose weight the guided density bounds: an 8-spp pilot
-  // seldom draws them (fire: emission 0.20 against full 0.18 per sample at 8 spp, 1.19 against 0.62
-  // at 64; shed-fire's region map x0.74 of emission by relMSE in the pilot, x2.15 of the best preset
-  // in the bench), while nine seeds of the bench at 8 s put full x1.35 ahead of emission by relMSE
-  // and x0.94 by MSE on fire.
+  // single scattering to make its glow (below). Its gain is in rare tracked vertices (dim smoke
+  // scattering a hot core's light, haze beside a sun's shafts) whose weight the guided density
+  // bounds: an 8-spp pilot seldom draws them (fire: emission 0.20 against full 0.18 per sample at 8
+  // spp, 1.19 against 0.62 at 64; shed-fire's region map x0.74 of emission by relMSE in the pilot,
+  // x2.15 of the best preset in the bench), while nine seeds of the bench at 8 s put full x1.35
+  // ahead of emission by relMSE and x0.94 by MSE on fire.
   // Where a medium that emits nothing scatters the flames' light and no sun shines into it (a torch
   // in mist or fog), it depends on how thin the medium is. Where most camera rays cross less than
   // one optical depth (torch-in-mist: 97%), single scattering makes the halo, which is what the

@@ -172,10 +172,11 @@ SplitMap AdaptiveSplit::decide(const Film& film, const Halves& sumSquares, const
     for (const Candidate& c : candidates)
       if (c.gain >= kNearBest * bestGain && (!kept || c.work < kept->work)) kept = &c;
   } else {
-    // No split gains both metrics: a small one for one metric (the header says when). The flame
-    // core's blocks on torch-in-mist and torch-in-fog (1-2% of the pixels, 4% more work) predicted
-    // x2.2-2.6 by MSE and x0.97-0.98 by relMSE and measured about x2 and x0.93-0.94 (six to nine
-    // seeds); splits of more work predicted as much and measured x0.70-1.19 by relMSE on shed-fire.
+    // No split gains both metrics: a small one for one metric (the header says when). With up to
+    // 5% more work the flame core's blocks on torch-in-mist and torch-in-fog predicted x2.2-2.6 by
+    // MSE and x0.97-0.98 by relMSE and measured about x2.1 and x0.94-0.96 (six to nine seeds); with
+    // the 2% kept, x1.4-1.5 and x0.98. Broader splits predicted as much and measured x0.70-1.19 by
+    // relMSE on shed-fire.
     auto oneMetric = [](const Candidate& c) { return std::max(c.absGain, c.relGain); };
     for (const Candidate& c : candidates)
       if (c.gain >= kOneSidedFloor && oneMetric(c) >= kOneSidedGain && c.work <= kOneSidedWork * costTotal && (!kept || oneMetric(c) > oneMetric(*kept)))
