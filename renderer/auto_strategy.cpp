@@ -151,8 +151,9 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
   // stands, as the pilot says.
   bool plainScatterer = false;
   for (const Medium* m : scene.media().media) plainScatterer |= !m->emissive() && m->albedoAverage() > 0.0f;
-  const double singleScatteringShare = emissive && plainScatterer && !sunLit ? thinRayShare(scene, 1.0f) : 0.0;
-  if (emissive && plainScatterer && !sunLit && singleScatteringShare < 0.5) {
+  const bool flamesLightAPlainMedium = emissive && plainScatterer && !sunLit;
+  const double singleScatteringShare = flamesLightAPlainMedium ? thinRayShare(scene, 1.0f) : 0.0;
+  if (flamesLightAPlainMedium && singleScatteringShare < 0.5) {
     std::snprintf(why, sizeof(why),
                   "the volumes light a medium that emits nothing, no sun shines, and %.0f%% of camera rays cross less than one optical depth: "
                   "emission stands", 100.0 * singleScatteringShare);
@@ -167,7 +168,7 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
     out.erase(out.begin());
     out.front().standing = true;
     std::string where = sunLit ? "volumes emit under a sun" : "only the emitting volumes scatter";
-    if (plainScatterer && !sunLit) {
+    if (flamesLightAPlainMedium) {
       std::snprintf(why, sizeof(why), "the volumes light a thin medium that emits nothing (%.0f%% of camera rays cross less than one optical depth)",
                     100.0 * singleScatteringShare);
       where = why;

@@ -33,8 +33,9 @@ struct SplitMap {
 // weight. A pixel that goes from 1 to k = 8 halfway through gets the variance of 227 camera
 // samples from 576, so a later, better-informed decision lost more than it won.
 //
-// Per 8 x 8 block: its pixels' variance per camera sample, absolute and relative to the image (the report's MSE and relMSE; a pixel's mean is the film's), and its work per camera
-// sample (work.h's cost). k is proportional to sqrt(variance / work), the allocation that
+// Per 8 x 8 block: its pixels' variance per camera sample, absolute and relative to the image (the
+// report's MSE and relMSE; a pixel's mean is the film's), and its work per camera sample (work.h's
+// cost). k is proportional to sqrt(variance / work), the allocation that
 // minimises variance x work, for a variance that weighs the two metrics by alpha and 1 - alpha;
 // the split kept is the one of least work whose predicted gain, by the worse of the two metrics,
 // is within 10% of the largest, and only when that gain is at least 10%. The gain is cross-validated:

@@ -47,10 +47,15 @@ struct SyntheticFilm {
   int splitAt(const SplitMap& m, int x, int y) const { return m.split.empty() ? 1 : m.split[static_cast<size_t>(y) * kWidth + x]; }
 };
 
-// Every pixel reads 1 +- noise(block), the sign alternating over pixels and samples.
+// Every pixel reads level(block) x (1 +- noise(block)), the sign alternating over pixels and samples.
+template <class Level, class Noise>
+auto plusMinusAround(Level level, Noise noise) {
+  return [level, noise](int block, int s, int x, int y) { return level(block) * (1.0f + ((s + x + y) % 2 == 0 ? 1.0f : -1.0f) * noise(block)); };
+}
+// Every pixel reads 1 +- noise(block).
 template <class Noise>
 auto plusMinus(Noise noise) {
-  return [noise](int block, int s, int x, int y) { return 1.0f + ((s + x + y) % 2 == 0 ? 1.0f : -1.0f) * noise(block); };
+  return plusMinusAround([](int) { return 1.0f; }, noise);
 }
 
 TEST(AdaptiveSplit, TheNoisyBlockTakesMoreSamplesAndTheCalmOnesKeepOne) {
@@ -101,7 +106,7 @@ TEST(AdaptiveSplit, ASmallBrightCoreSplitsForMseAlone) {
   // Block 21 (x 40-47, y 16-23) reads 20 +- 18, every other block 1 +- 0.9: any split loses a little
   // relMSE, and two camera samples in that one block halve most of the MSE. Its samples cost 40,
   // the others' 100, so that they add 1.3% to the work (kOneSidedWork).
-  const SyntheticFilm f([](int block, int s, int x, int y) { return (block == 21 ? 20.0f : 1.0f) * (1.0f + ((s + x + y) % 2 == 0 ? 0.9f : -0.9f)); },
+  const SyntheticFilm f(plusMinusAround([](int block) { return block == 21 ? 20.0f : 1.0f; }, [](int) { return 0.9f; }),
                         [](int block) { return block == 21 ? 40.0f : 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
   ASSERT_FALSE(m.split.empty()) << m.summary();
@@ -119,10 +124,8 @@ TEST(AdaptiveSplit, ABrightRegionTooLargeForAOneMetricSplitKeepsOne) {
   // A quarter of the blocks read 20 +- 18, the others 1 +- 0.6: two camera samples in the bright
   // blocks predict far less MSE and about as much relMSE (x1.02), but cost 25% more work, more than
   // kOneSidedWork allows, which bounds what relMSE could lose if the prediction were wrong.
-  const SyntheticFilm f([](int block, int s, int x, int y) {
-        const bool bright = block % 4 == 1;
-        return (bright ? 20.0f : 1.0f) * (1.0f + ((s + x + y) % 2 == 0 ? 1.0f : -1.0f) * (bright ? 0.9f : 0.6f));
-      },
+  const auto bright = [](int block) { return block % 4 == 1; };
+  const SyntheticFilm f(plusMinusAround([=](int block) { return bright(block) ? 20.0f : 1.0f; }, [=](int block) { return bright(block) ? 0.9f : 0.6f; }),
                         [](int) { return 100.0f; });
   const SplitMap m = AdaptiveSplit::decide(f.film, f.sumSquares, f.count, f.cost, 8);
   EXPECT_TRUE(m.split.empty()) << m.summary();
