@@ -610,6 +610,11 @@ int main(int argc, char** argv) {
   rep->add_flag("--quick", quick, "Lower resolution and budgets (CI: under 5 minutes on 2 cores)");
   rep->add_option("-o,--output", out, "Output directory")->required();
   rep->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
+  int reportSeeds = 0;
+  rep->add_option("--seeds", reportSeeds,
+                  "Seeds (17, 18, ...) every strategy renders at the largest budget; auto's ratios are their median (default " +
+                      std::to_string(kReportSeeds) + ", " + std::to_string(kQuickReportSeeds) + " with --quick)")
+      ->check(CLI::Range(1, 64));
 
   std::vector<int> pixel;
   int secondarySeed = -1, lightSamples = 256;
@@ -625,7 +630,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (maxMemoryGb > 0.0) setMemoryBudgetBytes(static_cast<size_t>(std::min(maxMemoryGb, 1e6) * 1073741824.0));
   try {
-    if (rep->parsed()) return runReport(quick, out, threads);
+    if (rep->parsed()) return runReport(quick, out, threads, reportSeeds);
     if (cal->parsed()) return calibrate();
     if (r->parsed()) {
       importOptions.up = upAxis == "z" ? UpAxis::Z : upAxis == "y" ? UpAxis::Y : UpAxis::Auto;

@@ -45,6 +45,15 @@ Film continueFromPilot(const Scene& scene, int maxSpp) {
   return *d->pilotFilm;
 }
 
+StrategySettings takeOverAutoChoice(const StrategySettings& running, const std::string& chosen) {
+  StrategySettings s = running;
+  const std::string preset = chosen.substr(0, chosen.find(','));
+  const auto& names = strategyPresetNames();
+  const bool named = preset != "auto" && std::find(names.begin(), names.end(), preset) != names.end();
+  s.preset = named ? preset : "conventional";
+  return s;
+}
+
 bool needsAutoResolve(const StrategySettings& s) { return s.preset == "auto" && toJson(s) == toJson(autoBaseStrategy()); }
 
 namespace {
@@ -283,9 +292,9 @@ AutoDecision decide(Scene& scene) {
   ProgressiveRenderer renderer(std::shared_ptr<const Scene>(&scene, [](const Scene*) {}), RenderOptions{0, 16});
   // Renders one candidate's pilot image on the next range of sample indices (independent of every
   // other pilot image) and measures it. The per-pixel moments go to `moments`. An image that only
-  // measures (!keepSamples: the fresh round's second look at its rival, the plain candidate's under
-  // a sun) renders from indices the image never uses, so the kept ones stay 0 to kept.spp() - 1,
-  // where the render continues.
+  // measures (!keepSamples: the plain candidate's images under a sun, its first and the fresh
+  // round's second look at it) renders from indices the image never uses, so the kept ones stay 0 to
+  // kept.spp() - 1, where the render continues.
   int nextUnkeptSample = 1 << 28;
   auto measure = [&](const AutoCandidate& c, PixelMoments& moments, bool keepSamples = true) {
     const bool hadProbes = scene.probes() != nullptr;
@@ -330,7 +339,7 @@ AutoDecision decide(Scene& scene) {
     if (candidates[i].name == "full") fullIndex = i;
   std::vector<AutoCandidate> refinements;
   images.reserve(candidates.size() + 3);
-  // Under a sun the plain candidate's image only measures, as the fresh round's rival does: where
+  // Under a sun the plain candidate's images only measure (the fresh round's look at it too): where
   // a sun shines into the media the guided candidates either win by far, the plain candidate's
   // variance per sample by MSE 4-6 times theirs (god-rays-dark, god-rays-backlit), or lose by a few
   // percent (god-rays), so its kept samples cost the first far more than dropping them costs the
@@ -392,11 +401,14 @@ AutoDecision decide(Scene& scene) {
       PixelMoments freshImage, freshImage2, rivalImage;
       const AutoMeasurement fresh = measure(candidates[challenger], freshImage);
       const AutoMeasurement fresh2 = measure(candidates[challenger], freshImage2);
-      // The rival's second image only measures: kept, it would add the samples of the candidate
-      // about to lose to the image (on god-rays-dark the plain candidate's, at 5 times full's
-      // variance per sample, 4 of the pilot's 14 samples per pixel instead of 2). Not keeping it is a
-      // rule fixed before any sample is drawn, so the kept samples stay unbiased.
-      const AutoMeasurement rivalAgain = measure(candidates[rival], rivalImage, false);
+      // The rival is the plain candidate, and its second image is kept where its first is: without
+      // a sun, where the plain candidate mostly keeps its place (torch-in-fog: the fresh round
+      // turned full down on every seed, and a dropped look cost 2 of the image's 100 samples per
+      // pixel). Under a sun it only measures, as the first does: kept, it would add the samples of
+      // the candidate about to lose (on god-rays-dark, at 5 times full's variance per sample, 4 of
+      // the pilot's 14 samples per pixel instead of 2). Either is a rule fixed before any sample is
+      // drawn, so the kept samples stay unbiased (docs/method.md 4b).
+      const AutoMeasurement rivalAgain = measure(candidates[rival], rivalImage, rival == 0 && keepPlain);
       // Pooled per candidate: the mean of its images' variances (against the shared mean) and work.
       std::vector<AutoMeasurement> pair{fresh, fresh2, d.pilot[rival], rivalAgain};
       score(pair, {&freshImage, &freshImage2, &images[rival], &rivalImage});

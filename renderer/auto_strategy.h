@@ -18,8 +18,8 @@
 //    sqrt(kAutoMargin).
 //    The same seed gives the same decision on any machine and thread count. An image small enough
 //    is piloted as it is, on sample indices of its own per candidate, and the pilot's samples stay
-//    in the image (AutoDecision::pilotFilm), but for the images that only measure (a fresh round's
-//    second look at its rival, and under a sun the plain candidate's): the pilot then costs the
+//    in the image (AutoDecision::pilotFilm), but for the images that only measure (under a sun
+//    the plain candidate's, a fresh round's second look at it included): the pilot then costs the
 //    difference between the candidates it kept and the one it chose, and those images' work.
 // Every candidate is an unbiased strategy: the choice changes the noise, never the image.
 #pragma once
@@ -111,6 +111,13 @@ std::vector<AutoCandidate> autoCandidates(const Scene& scene, std::vector<std::s
 // Decides for `scene` (rules, then the pilot when more than one candidate remains), applies the
 // choice with scene.setStrategy (preset stays "auto") and returns what it decided.
 AutoDecision resolveAutoStrategy(Scene& scene);
+
+// Auto's choice as settings an artist can take over: `running` (the scene's strategy once auto has
+// decided, preset "auto") under the preset named after the chosen candidate ("conventional,
+// gathering" is the conventional preset with gathering on), so that an edit to any of its fields
+// starts from what auto chose and runs as edited, without deciding again. The viewer's Strategy
+// panel shows auto's choice in its fields and applies an edit to them through this.
+StrategySettings takeOverAutoChoice(const StrategySettings& running, const std::string& chosen);
 
 // The film a render of `scene` starts from: the pilot's samples when auto piloted the image itself,
 // the scene's camera still matches it and they do not exceed `maxSpp` (0: no limit, for a render to

@@ -226,6 +226,31 @@ TEST(AutoStrategy, ChoosingAutoAgainRedecidesButTheSameDecisionDoesNot) {
   EXPECT_EQ(toJson(scene->strategy()), toJson(decided));
 }
 
+// The Strategy panel shows auto's choice in its fields; an edit to one of them takes the choice over:
+// the preset named after the candidate, every other field as auto set it, run as edited with no new
+// decision, and saved and loaded unchanged.
+TEST(AutoStrategy, AnEditTakesAutosChoiceOverAsItsPreset) {
+  for (const auto& [name, preset] : {std::pair<const char*, const char*>{"torch-in-mist", "full"}, {"cloud", "conventional"}}) {
+    auto scene = Scene::build(
+        test::loadScene(std::string("assets/scenes/") + name + ".json", {"strategy.preset=\"auto\"", "camera.resolution=[32,18]"}));
+    ASSERT_NE(scene->autoDecision(), nullptr) << name;
+    const StrategySettings running = scene->strategy();
+    StrategySettings taken = takeOverAutoChoice(running, scene->autoDecision()->chosen);
+    EXPECT_EQ(taken.preset, preset) << name;
+    EXPECT_FALSE(needsAutoResolve(taken)) << name;
+    Json sameFields = toJson(taken);
+    sameFields["preset"] = "auto";
+    EXPECT_EQ(sameFields, toJson(running)) << name;
+    EXPECT_EQ(toJson(strategyFromJson(toJson(taken), "session.json", "strategy")), toJson(taken)) << name;
+
+    taken.russian_roulette_depth = running.russian_roulette_depth + 2;
+    scene->applyStrategy(taken);
+    EXPECT_EQ(scene->autoDecision(), nullptr) << name;
+    EXPECT_EQ(toJson(scene->strategy()), toJson(taken)) << name;
+    EXPECT_EQ(scene->strategy().adaptive_split, running.adaptive_split) << name;
+  }
+}
+
 // An image no larger than the pilot's sample count is piloted as it is, and the pilot's samples
 // start the render: they are the scene seed's first sample indices, the render continues after them,
 // and they are used only for the view they were rendered for and only where they do not exceed the
@@ -238,8 +263,9 @@ TEST(AutoStrategy, ThePilotsSamplesStartTheImageOfTheViewTheyWereRenderedFor) {
   EXPECT_EQ(d->pilotWidth, 96);
   EXPECT_EQ(d->pilotSpp, 8);
   // Each fresh round ("measured again": against full, then against the standing candidate) renders
-  // three more images and keeps the challenger's two: the rival's second look only measures. Under
-  // god-rays-dark's sun the plain candidate's first image only measures too.
+  // three more images: the challenger's two and a second look at its rival, the plain candidate.
+  // Under god-rays-dark's sun the plain candidate's images only measure, the first and the second
+  // look; without a sun every image is kept.
   const auto reasonsWith = [](const AutoDecision& decision, const char* text) {
     return static_cast<int>(std::count_if(decision.reasons.begin(), decision.reasons.end(),
                                           [&](const std::string& r) { return r.find(text) != std::string::npos; }));
@@ -252,14 +278,14 @@ TEST(AutoStrategy, ThePilotsSamplesStartTheImageOfTheViewTheyWereRenderedFor) {
   EXPECT_NE(d->summary().find(std::to_string(d->pilotFilm->spp()) + " spp kept in the image"), std::string::npos) << d->summary();
   const int kept = d->pilotFilm->spp();
   {
-    // Without a sun the plain candidate's first image stays (torch-in-fog).
+    // Without a sun the plain candidate's images stay, the fresh round's look at it too (torch-in-fog).
     const auto unlit =
         Scene::build(test::loadScene("assets/scenes/torch-in-fog.json", {"strategy.preset=\"auto\"", "camera.resolution=[96,54]"}));
     const AutoDecision* u = unlit->autoDecision();
     ASSERT_NE(u, nullptr);
     ASSERT_NE(u->pilotFilm, nullptr) << u->summary();
     EXPECT_EQ(reasonsWith(*u, "only measures"), 0) << u->summary();
-    EXPECT_EQ(u->pilotFilm->spp(), (static_cast<int>(u->pilot.size()) + 2 * reasonsWith(*u, "measured again")) * u->pilotSpp)
+    EXPECT_EQ(u->pilotFilm->spp(), (static_cast<int>(u->pilot.size()) + 3 * reasonsWith(*u, "measured again")) * u->pilotSpp)
         << u->summary();
   }
   EXPECT_EQ(continueFromPilot(*scene, 0).spp(), kept);

@@ -278,6 +278,18 @@ elseif(MODE STREQUAL "save")
   run_checked(${COMPARE} --same-exr ${OUT}/edited.exr ${OUT}/reopened.exr)
   metadata(${OUT}/reopened.png display display)
   expect_contains("${display}" "\"exposure\":1.5")
+  # Under auto, a strategy field's edit takes auto's choice over (torch-in-mist: full, with its
+  # relative emission weight and adaptive sampling) rather than editing auto's undecided settings.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --edit strategy.russian_roulette_depth=5
+              --save-as ${OUT}/looks/taken-over.json --screenshot ${OUT}/taken-over.png --after-spp 4 --quit)
+  file(READ ${OUT}/looks/taken-over.json saved)
+  string(JSON preset GET "${saved}" strategy preset)
+  string(JSON depth GET "${saved}" strategy russian_roulette_depth)
+  string(JSON split GET "${saved}" strategy adaptive_split)
+  string(JSON relative GET "${saved}" strategy majorant relative_weight)
+  if(NOT preset STREQUAL "full" OR NOT depth EQUAL 5 OR NOT split EQUAL 8 OR NOT relative STREQUAL "ON")
+    message(FATAL_ERROR "an edit under auto saved preset ${preset}, russian_roulette_depth ${depth}, adaptive_split ${split}, relative_weight ${relative}")
+  endif()
 elseif(MODE STREQUAL "undo")
   # Two edits, undo both, redo one: the first edit is back, the second is not.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --edit volumes.1.g=0.3 --edit volumes.1.sigma_t_scale=2

@@ -4,6 +4,8 @@
 // the other concerns live.
 #include "viewer_impl.h"
 
+#include "auto_strategy.h"
+
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 
@@ -186,9 +188,18 @@ void Viewer::submitEdit(const std::string& group) {
   }
 }
 
+const StrategySettings* Viewer::autoChoiceShown() const {
+  if (!frame_ || !frame_->scene || frame_->autoChoice.empty() || !needsAutoResolve(edited_.strategy)) return nullptr;
+  return &frame_->scene->strategy;
+}
+
 void Viewer::applySettingEdit(const std::string& assignment) {
   try {
     Json doc = sceneToJson(edited_);
+    // A strategy field edited under auto starts from what auto chose, as in the Strategy panel.
+    const bool strategyField = assignment.rfind("strategy.", 0) == 0 && assignment.rfind("strategy.preset", 0) != 0;
+    if (const StrategySettings* chosen = autoChoiceShown(); chosen && strategyField)
+      doc["strategy"] = toJson(takeOverAutoChoice(*chosen, frame_->autoChoice));
     applySetting(doc, assignment, edited_.path + " (edit " + assignment + ")");
     SceneDesc valid = parseSceneDesc(doc, edited_.path);
     const bool rendered = rendersDifferently(valid, edited_);

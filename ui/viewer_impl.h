@@ -81,6 +81,10 @@ class Viewer {
   // the previous undo step of the same gesture.
   void submitEdit(const std::string& group = "");
   void applySettingEdit(const std::string& assignment);
+  // Under auto as chosen, once an image shows what it decided: the strategy that runs (preset
+  // "auto"), which the Strategy panel shows in its fields and which an edit of a strategy field takes
+  // over (takeOverAutoChoice). Null otherwise.
+  const StrategySettings* autoChoiceShown() const;
   void beginLatency(uint64_t request);
   nlohmann::json lookState() const;  // {"scene", "display"}: what undo and snapshots keep
   void restoreLook(const nlohmann::json& look, const std::string& what);

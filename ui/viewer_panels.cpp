@@ -2,6 +2,7 @@
 // snapshots, the timeline and the status bar.
 #include "viewer_impl.h"
 
+#include "auto_strategy.h"
 #include "error_chart.h"
 #include "param_editor.h"
 
@@ -258,10 +259,17 @@ void Viewer::drawPanel() {
   if (!compare_ && ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
     ParamEditor editor;
     editor.choices["preset"] = strategyPresetNames();
-    if (frame_ && !frame_->autoDecision.empty() && edited_.strategy.preset == "auto") {
+    // Under auto as chosen, the fields show what auto decided (the running scene's strategy, not the
+    // document's undecided one), and an edit to any of them takes that choice over as its preset.
+    const StrategySettings* autoChoice = autoChoiceShown();
+    if (autoChoice) {
       // What auto decided, and why: the fields below are its choice.
       ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.6f, 0.85f, 1.0f, 1.0f));
       ImGui::TextWrapped("%s", frame_->autoDecision.c_str());
+      ImGui::PopStyleColor();
+      ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
+      ImGui::TextWrapped("Editing a field below takes auto's choice over as the %s preset.",
+                         takeOverAutoChoice(*autoChoice, frame_->autoChoice).preset.c_str());
       ImGui::PopStyleColor();
     }
     if (frame_ && !frame_->adaptiveSplit.empty()) {
@@ -269,8 +277,10 @@ void Viewer::drawPanel() {
       ImGui::TextWrapped("%s", frame_->adaptiveSplit.c_str());
       ImGui::PopStyleColor();
     }
-    edited_.strategy.visit(editor);
+    StrategySettings shown = autoChoice ? *autoChoice : edited_.strategy;
+    shown.visit(editor);
     if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
+    else if (editor.changed) edited_.strategy = autoChoice ? takeOverAutoChoice(shown, frame_->autoChoice) : shown;
     changed |= editor.changed;
   }
   if (ImGui::CollapsingHeader("Render")) {
