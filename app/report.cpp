@@ -218,6 +218,8 @@ const std::vector<ReportScene> kReportScenes{
     {"god-rays", "emission", 4096},    {"god-rays-backlit", "full", 5120}, {"god-rays-dark", "full", 6144},
     {"cloud", "emission", 4096},       {"shed-fire", "full", 4096},
 };
+const char* const kQuickReferencePreset = "emission";
+constexpr int kQuickReferenceSpp = 256;
 
 std::string html(const std::string& s) {
   std::string out;
@@ -242,7 +244,8 @@ int runReport(bool quick, const std::string& dir, int threads, int seedCount) {
   std::string headlineSvg;
   body << "<h2>Equal-time convergence</h2><p>Budgets " ;
   for (double b : budgets) body << b << " s ";
-  body << "per strategy; each scene's reference (cached) rendered with " << (quick ? "<code>emission</code> at 256 spp" : "the preset best on it, at 16-20 times the samples it reaches at 8 s (named with the scene)") << ". "
+  body << "per strategy; each scene's reference (cached) rendered with " << (quick ? "<code>" + std::string(kQuickReferencePreset) + "</code> at " + std::to_string(kQuickReferenceSpp) + " spp"
+                                                                        : std::string("the preset best on it, at 16-20 times the samples it reaches at 8 s (named with the scene)")) << ". "
        << html(kRelMseFormula) << ". Efficiency = 1 / (relMSE x time) at the largest budget. Charts, tables and images: seed "
        << efficiencySeedList.front() << ". Auto's ratios against the presets: ";
   if (efficiencySeedList.size() == 1) {
@@ -258,8 +261,8 @@ int runReport(bool quick, const std::string& dir, int threads, int seedCount) {
     const std::string& name = scene.name;
     SceneDesc base = loadSceneDesc(assets + name + ".json");
     base.camera.resolution = {std::max(8, base.camera.resolution.first / divisor), std::max(8, base.camera.resolution.second / divisor)};
-    const std::string referencePreset = quick ? "emission" : scene.referencePreset;
-    const int referenceSpp = quick ? 256 : scene.referenceSpp;
+    const std::string referencePreset = quick ? kQuickReferencePreset : scene.referencePreset;
+    const int referenceSpp = quick ? kQuickReferenceSpp : scene.referenceSpp;
     std::printf("report: %s at %dx%d: reference (%s, %d spp)...\n", name.c_str(), base.camera.resolution.first, base.camera.resolution.second,
                 referencePreset.c_str(), referenceSpp);
     std::fflush(stdout);

@@ -49,8 +49,7 @@ StrategySettings takeOverAutoChoice(const StrategySettings& running, const std::
   StrategySettings s = running;
   const std::string preset = chosen.substr(0, chosen.find(','));
   const auto& names = strategyPresetNames();
-  const bool named = preset != "auto" && std::find(names.begin(), names.end(), preset) != names.end();
-  s.preset = named ? preset : "conventional";
+  s.preset = std::find(names.begin(), names.end(), preset) != names.end() ? preset : "conventional";
   return s;
 }
 
