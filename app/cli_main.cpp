@@ -612,9 +612,16 @@ int main(int argc, char** argv) {
   rep->add_option("--threads", threads, "Worker threads (0: all)")->check(CLI::NonNegativeNumber);
   int reportSeeds = 0;
   rep->add_option("--seeds", reportSeeds,
-                  "Seeds (17, 18, ...) every strategy renders at the largest budget; auto's ratios are their median (default " +
-                      std::to_string(kReportSeeds) + ", " + std::to_string(kQuickReportSeeds) + " with --quick)")
+                  "Seeds (17, 18, ...) every strategy renders at the largest budget on every scene; auto's ratios are their median (default " +
+                      std::to_string(kReportSeeds) + ", " + std::to_string(kWideSpreadReportSeeds) + " on the scenes whose seeds disagree most, " +
+                      std::to_string(kQuickReportSeeds) + " with --quick)")
       ->check(CLI::Range(1, 64));
+  std::vector<std::string> reportScenes;
+  std::string knownReportScenes;
+  for (const std::string& n : reportSceneNames()) knownReportScenes += (knownReportScenes.empty() ? "" : ", ") + n;
+  rep->add_option("--scenes", reportScenes, "Only these report scenes, comma-separated (" + knownReportScenes + "; default all)")->delimiter(',');
+  bool noStability = false;
+  rep->add_flag("--no-stability", noStability, "Skip the stability suite");
 
   std::vector<int> pixel;
   int secondarySeed = -1, lightSamples = 256;
@@ -630,7 +637,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (maxMemoryGb > 0.0) setMemoryBudgetBytes(static_cast<size_t>(std::min(maxMemoryGb, 1e6) * 1073741824.0));
   try {
-    if (rep->parsed()) return runReport(quick, out, threads, reportSeeds);
+    if (rep->parsed()) return runReport(quick, out, threads, reportSeeds, reportScenes, !noStability);
     if (cal->parsed()) return calibrate();
     if (r->parsed()) {
       importOptions.up = upAxis == "z" ? UpAxis::Z : upAxis == "y" ? UpAxis::Y : UpAxis::Auto;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace candela {
 
@@ -9,10 +10,17 @@ namespace candela {
 // cached references, runs the stability suite, and writes DIR/index.html plus DIR/headline.svg and
 // DIR/headline.md (the torch-in-mist chart and efficiency table the README shows). `quick`: lower
 // resolution, shorter budgets and fewer samples, for CI (under 5 minutes on 2 cores). `seedCount`:
-// how many seeds (17, 18, ...) every strategy renders at the largest budget for auto's ratios; 0 for
-// the default, kReportSeeds (kQuickReportSeeds with `quick`).
+// how many seeds (17, 18, ...) every strategy renders at the largest budget for auto's ratios, on
+// every scene; 0 for the defaults: kReportSeeds, kWideSpreadReportSeeds on the scenes whose seeds
+// disagree most, kQuickReportSeeds on all with `quick`. `scenes`: the report scenes to render
+// (empty: all of them; reportSceneNames() lists them; an unknown name throws InputError), and
+// `stability` whether the stability suite runs: a rendering engineer measuring one scene with more
+// seeds runs that scene alone.
 inline constexpr int kReportSeeds = 7;
+inline constexpr int kWideSpreadReportSeeds = 15;  // on the scenes whose seeds disagree most (report.cpp, kReportScenes)
 inline constexpr int kQuickReportSeeds = 3;
-int runReport(bool quick, const std::string& dir, int threads, int seedCount = 0);
+std::vector<std::string> reportSceneNames();
+int runReport(bool quick, const std::string& dir, int threads, int seedCount = 0, const std::vector<std::string>& scenes = {},
+              bool stability = true);
 
 }  // namespace candela
