@@ -210,11 +210,12 @@ std::vector<uint64_t> efficiencySeeds(int count) {
 // pipeline, not the figures) keeps emission at 256 spp.
 //
 // Seeds per scene: where the seeds disagree, more of them. On fire, the torch scenes and shed-fire
-// auto's ratio per seed spread 25-45% by relMSE over seven seeds (fire x1.10-1.57, torch-in-mist
-// x0.78-0.98, torch-in-fog x0.85-0.98, shed-fire x0.88-1.12 at cc80794; their relMSE is a few
-// pixels' rare paths), elsewhere within 5% of the median. Seven seeds' median of so wide a spread
-// sits up to a tenth off (fire's seeds 17-23 read x1.16, seeds 17-31 x1.34); fifteen halve that
-// for about 6 minutes a scene (docs/performance.md, "Fifteen seeds where the seeds disagree").
+// auto's ratio per seed spread 14-40% of its median by relMSE over seven seeds (fire x1.10-1.57,
+// torch-in-mist x0.78-0.98, torch-in-fog x0.85-0.98, shed-fire x0.88-1.12 at cc80794; their
+// relMSE is a few pixels' rare paths), elsewhere within 7% (mostly 3%). Seven seeds' median of so
+// wide a spread can sit a tenth off (fire's seeds 17-23 read x1.16, seeds 17-31 x1.34); fifteen
+// narrow it by a third, for about 6 minutes a scene (docs/performance.md, "Fifteen seeds where the
+// seeds disagree").
 struct ReportScene {
   std::string name;
   std::string referencePreset;
