@@ -617,9 +617,7 @@ int main(int argc, char** argv) {
                       std::to_string(kQuickReportSeeds) + " with --quick)")
       ->check(CLI::Range(1, 64));
   std::vector<std::string> reportScenes;
-  std::string knownReportScenes;
-  for (const std::string& n : reportSceneNames()) knownReportScenes += (knownReportScenes.empty() ? "" : ", ") + n;
-  rep->add_option("--scenes", reportScenes, "Only these report scenes, comma-separated (" + knownReportScenes + "; default all)")->delimiter(',');
+  rep->add_option("--scenes", reportScenes, "Only these report scenes, comma-separated (" + reportSceneList() + "; default all)")->delimiter(',');
   bool noStability = false;
   rep->add_flag("--no-stability", noStability, "Skip the stability suite");
 

@@ -238,32 +238,35 @@ std::string html(const std::string& s) {
 
 }  // namespace
 
-std::vector<std::string> reportSceneNames() {
-  std::vector<std::string> names;
-  for (const ReportScene& s : kReportScenes) names.push_back(s.name);
-  return names;
+// The names of the report scenes that pass `keep`, comma-separated.
+template <class Keep>
+std::string sceneList(Keep keep) {
+  std::string list;
+  for (const ReportScene& s : kReportScenes)
+    if (keep(s)) list += (list.empty() ? "" : ", ") + s.name;
+  return list;
+}
+
+std::string reportSceneList() {
+  return sceneList([](const ReportScene&) { return true; });
 }
 
 int runReport(bool quick, const std::string& dir, int threads, int seedCount, const std::vector<std::string>& sceneNames, bool stability) {
-  // Seeds per scene: `seedCount` for all when given, else the defaults (ReportScene::seedsDisagree).
+  // Seeds per scene: one count for every scene when asked for or quick (0: none), else the
+  // defaults (ReportScene::seedsDisagree).
+  const int everyScene = seedCount > 0 ? seedCount : quick ? kQuickReportSeeds : 0;
   auto seedsOf = [&](const ReportScene& scene) {
-    if (seedCount > 0) return seedCount;
-    if (quick) return kQuickReportSeeds;
-    return scene.seedsDisagree ? kWideSpreadReportSeeds : kReportSeeds;
+    return everyScene > 0 ? everyScene : scene.seedsDisagree ? kWideSpreadReportSeeds : kReportSeeds;
   };
   // The scenes asked for, in the report's order; a name the report does not know is an error that
   // lists the ones it does, before anything renders.
-  const std::vector<std::string> known = reportSceneNames();
-  for (const std::string& n : sceneNames)
-    if (std::find(known.begin(), known.end(), n) == known.end()) {
-      std::string list;
-      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-      throw InputError("report --scenes: unknown scene \"" + n + "\", expected one of " + list);
-    }
+  auto asked = [&](const std::string& name) { return std::find(sceneNames.begin(), sceneNames.end(), name) != sceneNames.end(); };
   std::vector<ReportScene> scenes;
   for (const ReportScene& s : kReportScenes)
-    if (sceneNames.empty() || std::find(sceneNames.begin(), sceneNames.end(), s.name) != sceneNames.end()) scenes.push_back(s);
-  const std::vector<uint64_t> chartedSeed = efficiencySeeds(1);
+    if (sceneNames.empty() || asked(s.name)) scenes.push_back(s);
+  for (const std::string& n : sceneNames)
+    if (std::none_of(kReportScenes.begin(), kReportScenes.end(), [&](const ReportScene& s) { return s.name == n; }))
+      throw InputError("report --scenes: unknown scene \"" + n + "\", expected one of " + reportSceneList());
   const auto start = Clock::now();
   fs::create_directories(dir);
   const std::string tmp = (fs::path(dir) / ".tmp.png").string();
@@ -279,19 +282,13 @@ int runReport(bool quick, const std::string& dir, int threads, int seedCount, co
   body << "per strategy; each scene's reference (cached) rendered with " << (quick ? "<code>" + std::string(kQuickReferencePreset) + "</code> at " + std::to_string(kQuickReferenceSpp) + " spp"
                                                                         : std::string("the preset best on it, at 16-20 times the samples it reaches at 8 s (named with the scene)")) << ". "
        << html(kRelMseFormula) << ". Efficiency = 1 / (relMSE x time) at the largest budget. Charts, tables and images: seed "
-       << chartedSeed.front() << ". Auto's ratios against the presets: ";
-  if (seedCount == 1) {
-    body << "seed " << chartedSeed.front() << "'s alone";
-  } else if (seedCount > 0 || quick) {
-    body << "every strategy rendered again at the largest budget with the seeds after it, each seed's ratio side by side, the median over "
-         << (seedCount > 0 ? seedCount : kQuickReportSeeds) << " seeds on every scene";
+       << kFirstEfficiencySeed << ". Auto's ratios against the presets: ";
+  if (everyScene == 1) {
+    body << "seed " << kFirstEfficiencySeed << "'s alone";
   } else {
     body << "every strategy rendered again at the largest budget with the seeds after it, each seed's ratio side by side, the median over ";
-    body << kReportSeeds << " seeds, " << kWideSpreadReportSeeds << " where the seeds disagree most (";
-    std::string wide;
-    for (const ReportScene& scene : kReportScenes)
-      if (scene.seedsDisagree) wide += (wide.empty() ? "" : ", ") + scene.name;
-    body << wide << ")";
+    if (everyScene > 0) body << everyScene << " seeds on every scene";
+    else body << kReportSeeds << " seeds, " << kWideSpreadReportSeeds << " where the seeds disagree most (" << sceneList([](const ReportScene& s) { return s.seedsDisagree; }) << ")";
   }
   body << "; by time and by counted work (renderer/work.h, which reads no clock).</p>\n";
 

@@ -13,13 +13,13 @@ namespace candela {
 // how many seeds (17, 18, ...) every strategy renders at the largest budget for auto's ratios, on
 // every scene; 0 for the defaults: kReportSeeds, kWideSpreadReportSeeds on the scenes whose seeds
 // disagree most, kQuickReportSeeds on all with `quick`. `scenes`: the report scenes to render
-// (empty: all of them; reportSceneNames() lists them; an unknown name throws InputError), and
+// (empty: all of them; reportSceneList() names them; an unknown name throws InputError), and
 // `stability` whether the stability suite runs: a rendering engineer measuring one scene with more
 // seeds runs that scene alone.
 inline constexpr int kReportSeeds = 7;
 inline constexpr int kWideSpreadReportSeeds = 15;  // on the scenes whose seeds disagree most (report.cpp, kReportScenes)
 inline constexpr int kQuickReportSeeds = 3;
-std::vector<std::string> reportSceneNames();
+std::string reportSceneList();  // the report scenes' names, comma-separated
 int runReport(bool quick, const std::string& dir, int threads, int seedCount = 0, const std::vector<std::string>& scenes = {},
               bool stability = true);
 
