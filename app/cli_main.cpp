@@ -26,6 +26,7 @@
 #include <iostream>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <fstream>
 #include <sstream>
 
@@ -71,8 +72,12 @@ std::shared_ptr<Scene> buildScene(const SceneDesc& desc) {
   return scene;
 }
 
-// Renders `desc` and writes `out`; returns the render seconds.
-double renderOne(const SceneDesc& desc, const std::string& scenePath, const std::string& out, int threads, bool quiet) {
+// Renders `desc` and writes `out`; returns the render seconds. A PNG is display-referred: the scene's
+// exposure, or when it gives none (an opened VDB, a scene without display.exposure) auto exposure
+// from this image, decided once for a sequence: `sequenceExposure` carries the first frame's choice
+// to the others, so the frames do not flicker.
+double renderOne(const SceneDesc& desc, const std::string& scenePath, const std::string& out, int threads, bool quiet,
+                 std::optional<float>* sequenceExposure = nullptr) {
   const auto loadStart = std::chrono::steady_clock::now();
   auto scene = buildScene(desc);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
@@ -89,13 +94,18 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   if (const AutoDecision* d = scene->autoDecision()) image.metadata["auto_decision"] = d->summary();
   if (const SplitMap* split = renderer.adaptiveSplit()) image.metadata["adaptive_split"] = split->summary();
   image.metadata["rejected_samples"] = std::to_string(film.rejectedSamples());
-  // A PNG is display-referred: the scene's exposure, or for an opened VDB one that shows the volume.
   float exposure = desc.display.exposure;
-  if (isVdbPath(scenePath)) exposure = autoExposureStops(image.rgb);
+  if (desc.display.autoExposure) {
+    if (sequenceExposure && *sequenceExposure) exposure = **sequenceExposure;
+    else exposure = autoExposureStops(image.rgb);
+    if (sequenceExposure) *sequenceExposure = exposure;
+  }
   image.metadata["exposure"] = std::to_string(exposure);
   const std::filesystem::path parent = std::filesystem::path(out).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
-  if (std::filesystem::path(out).extension() == ".png")
+  std::string extension = std::filesystem::path(out).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".png")
     writePng(out, image, exposure);
   else
     writeImage(out, image);
@@ -189,12 +199,13 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
   // A frame whose files cannot be read (a missing or truncated sim frame) is reported and passed: the
   // other frames of a long batch still render, and the exit status says some did not.
   std::vector<int> failed;
+  std::optional<float> exposure;  // the first rendered frame's auto exposure, kept for the rest
   for (int f = first; f <= last; ++f) {
     SceneDesc frame = desc;
     frame.render.frame = f;
     const std::string path = substituteFrame(pattern, f);
     try {
-      renderOne(frame, scenePath, path, threads, true);
+      renderOne(frame, scenePath, path, threads, true, &exposure);
     } catch (const InputError& e) {
       std::fprintf(stderr, "\nerror: frame %d: %s (going on with the next frame)\n", f, e.what());
       failed.push_back(f);

@@ -31,6 +31,10 @@ struct DisplaySettings {
   std::string display;    // "" = the config's default display
   std::string view;       // "" = the display's default view
   float gamma = 1.0f;
+  // No exposure given (a scene file without display.exposure, an opened VDB): the viewer and PNG
+  // outputs choose one from the first image (autoExposureStops) and keep it. Not a schema field: a
+  // scene file says it by leaving "exposure" out, and sceneToJson leaves it out while this holds.
+  bool autoExposure = false;
 
   template <class V>
   void visit(V& v) {

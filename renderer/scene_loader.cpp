@@ -105,6 +105,7 @@ SceneDesc parseSceneDesc(const Json& doc, const std::string& file) {
   scene.path = file;
   if (doc.contains("description")) scene.description = doc["description"].get<std::string>();
   if (doc.contains("display")) fromJson(doc["display"], scene.display, file, "display");
+  scene.display.autoExposure = !(doc.contains("display") && doc["display"].is_object() && doc["display"].contains("exposure"));
   if (!doc.contains("camera")) throw InputError(file + ": camera: required field is missing");
   fromJson(doc["camera"], scene.camera, file, "camera");
   if (doc.contains("render")) fromJson(doc["render"], scene.render, file, "render");
@@ -164,6 +165,7 @@ Json sceneToJson(const SceneDesc& scene) {
   if (!scene.description.empty()) doc["description"] = scene.description;
   doc["camera"] = toJson(scene.camera);
   doc["display"] = toJson(scene.display);
+  if (scene.display.autoExposure) doc["display"].erase("exposure");
   doc["render"] = toJson(scene.render);
   doc["strategy"] = toJson(scene.strategy);
   doc["volumes"] = Json::array();
@@ -193,8 +195,10 @@ SceneDesc saveSceneDesc(const SceneDesc& scene, const std::string& path) {
   namespace fs = std::filesystem;
   SceneDesc saved = scene;
   saved.path = path;
-  const fs::path oldBase = fs::absolute(fs::path(scene.path).parent_path());
-  const fs::path newBase = fs::absolute(fs::path(path).parent_path());
+  // The folders the relative volume paths are read from and written to. A bare file name ("fire.json")
+  // has an empty parent, which fs::absolute refuses: the file's own absolute path has the folder.
+  const fs::path oldBase = fs::absolute(scene.path.empty() ? fs::path("scene.json") : fs::path(scene.path)).parent_path();
+  const fs::path newBase = fs::absolute(path).parent_path();
   for (auto& v : saved.volumes) {
     if (v.file.empty() || fs::path(v.file).is_absolute()) continue;
     const fs::path target = (oldBase / v.file).lexically_normal();

@@ -128,6 +128,7 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
   scene.path = (vdb.parent_path() / (vdb.stem().string() + ".json")).string();
   scene.render.spp = 256;
   scene.render.max_depth = 16;
+  scene.display.autoExposure = true;  // nothing in a VDB says how bright it reads
 
   VolumeDesc volume;
   volume.name = vdb.stem().string();

@@ -55,24 +55,33 @@ TEST(EditHistory, AGestureIsOneStepAndAnUnchangedStateRecordsNothing) {
 }
 
 // Auto exposure on open comes with the first image; an edit made before it is its own undo step.
-// Undoing that edit keeps the auto exposure: the change holds for every state that had the opened
-// exposure, and leaves one the artist set alone.
+// Undoing that edit keeps the auto exposure: the choice fills every state that had no exposure of
+// its own (the file gave none), and leaves one the artist set alone.
 TEST(EditHistory, AutoExposureHoldsUnderEarlierEdits) {
   EditHistory h;
-  h.reset({{"display", {{"exposure", 0.0}}}, {"seed", 1}});
-  h.record({{"display", {{"exposure", 0.0}}}, {"seed", 7}});
+  h.reset({{"display", Json::object()}, {"seed", 1}});
+  h.record({{"display", Json::object()}, {"seed", 7}});
   h.record({{"display", {{"exposure", 2.0}}}, {"seed", 7}});  // set by the artist
   h.undo();
-  h.amendEverywhere(Json::json_pointer("/display/exposure"), 0.0, -3.5);
+  h.fillEverywhere(Json::json_pointer("/display/exposure"), -3.5);
   EXPECT_EQ(*h.undo(), Json({{"display", {{"exposure", -3.5}}}, {"seed", 1}}));
   EXPECT_EQ(*h.redo(), Json({{"display", {{"exposure", -3.5}}}, {"seed", 7}}));
   EXPECT_EQ(*h.redo(), Json({{"display", {{"exposure", 2.0}}}, {"seed", 7}}));
-  // A state without the field is left as it is.
-  EditHistory bare;
-  bare.reset({{"seed", 1}});
-  bare.amendEverywhere(Json::json_pointer("/display/exposure"), 0.0, -3.5);
-  bare.record({{"seed", 2}});
-  EXPECT_EQ(*bare.undo(), Json({{"seed", 1}}));
+}
+
+// A scene file without display.exposure asks for auto exposure; one with it keeps it, and the
+// choice survives a save and reopen (the exposure is written once chosen, left out while it is not).
+TEST(SceneFile, ExposureLeftOutMeansAuto) {
+  const Json camera{{"position", {0, 0, 5}}, {"look_at", {0, 0, 0}}};
+  SceneDesc open = parseSceneDesc(Json{{"camera", camera}}, "a.json");
+  EXPECT_TRUE(open.display.autoExposure);
+  EXPECT_FALSE(sceneToJson(open)["display"].contains("exposure"));
+  EXPECT_TRUE(parseSceneDesc(sceneToJson(open), "a.json").display.autoExposure);
+  SceneDesc given = parseSceneDesc(Json{{"camera", camera}, {"display", {{"exposure", 0.0}}}}, "b.json");
+  EXPECT_FALSE(given.display.autoExposure);
+  EXPECT_EQ(sceneToJson(given)["display"]["exposure"], 0.0);
+  open.display.exposure = 3.25f, open.display.autoExposure = false;
+  EXPECT_FLOAT_EQ(parseSceneDesc(sceneToJson(open), "a.json").display.exposure, 3.25f);
 }
 
 // An edit whose scene cannot build (a truncated VDB typed into the file field) leaves the history

@@ -116,14 +116,15 @@ elseif(MODE STREQUAL "input")
   # the Parameters panel does not (ImGui wants that mouse), and F frames the volume. The screenshot's
   # settings metadata says where the camera ended up.
   file(WRITE ${OUT}/drive.sh
-       "${VIEWER} ${SCENE} --set camera.resolution=[160,90] --screenshot ${OUT}/$1.png --after 3 --quit &
+       "${VIEWER} ${SCENE} --set camera.resolution=[160,90] --set display.exposure=0 --screenshot ${OUT}/$1.png --after 3 --quit &
         sleep 2.5
         if [ $1 = image ]; then xdotool mousemove 400 400 sleep 0.2 mousedown 1 sleep 0.2 mousemove 450 410 sleep 0.2 mousemove 520 420 sleep 0.2 mouseup 1; fi
         if [ $1 = panel ]; then xdotool mousemove 1300 600 sleep 0.2 mousedown 1 sleep 0.2 mousemove 1350 610 sleep 0.2 mousemove 1420 620 sleep 0.2 mouseup 1; fi
         if [ $1 = frame ]; then xdotool mousemove 400 400 sleep 0.2 key f; fi
+        if [ $1 = keys ]; then xdotool mousemove 400 400 sleep 0.2 key --delay 1 e e e e e e e e c c c; fi
         wait $!
 ")
-  foreach(case image panel frame)
+  foreach(case image panel frame keys)
     run_checked(${XVFB} sh ${OUT}/drive.sh ${case})
     execute_process(COMMAND ${COMPARE} --metadata ${OUT}/${case}.png settings OUTPUT_VARIABLE settings RESULT_VARIABLE rc)
     if(NOT rc EQUAL 0)
@@ -146,6 +147,13 @@ elseif(MODE STREQUAL "input")
   endif()
   if("${look_at_frame}" STREQUAL "${look_at_panel}")
     message(FATAL_ERROR "F did not frame the volume (look_at unchanged)")
+  endif()
+  # Eight presses of E and three of C, as fast as xdotool types them: every press counts.
+  metadata(${OUT}/keys.png display display)
+  string(JSON exposure GET "${display}" exposure)
+  string(JSON channel GET "${display}" channel)
+  if(NOT exposure EQUAL 4 OR NOT channel STREQUAL "b")
+    message(FATAL_ERROR "8 presses of E and 3 of C gave exposure ${exposure} (expected 4) and channel ${channel} (expected b)")
   endif()
 elseif(MODE STREQUAL "figure")
   # The talk's Fig. 1 as a scripted comparison: three panes at equal time, a rendered reference.
@@ -170,6 +178,11 @@ elseif(MODE STREQUAL "open_vdb")
     expect_contains("${opened}" "Y-up")
     metadata(${OUT}/${type}.png document document)
     expect_contains("${document}" "${type}.json")
+    # Opened and not touched: nothing to save, so switching files or quitting asks nothing.
+    metadata(${OUT}/${type}.png unsaved_edits unsaved)
+    if(NOT unsaved STREQUAL "no")
+      message(FATAL_ERROR "${type}.vdb opened and untouched reads as unsaved (${unsaved})")
+    endif()
     halves(${OUT}/${type}.png left right levels)
     if(levels LESS 12)
       message(FATAL_ERROR "${type}: the opened volume shows only ${levels} levels: nothing rendered in frame?")
@@ -258,6 +271,88 @@ elseif(MODE STREQUAL "open_vdb")
   if(document MATCHES "broken-drop" OR NOT exposure EQUAL kept_exposure OR NOT seed EQUAL kept_seed)
     message(FATAL_ERROR "after a failed, edited drop: document ${document}, exposure ${exposure} (expected ${kept_exposure}), seed ${seed} (expected ${kept_seed})")
   endif()
+  # A drop that cannot open at all (no such file; not JSON): the error names it, and the scene on
+  # screen keeps its samples (no reload, no claim that its file changed on disk).
+  file(WRITE ${OUT}/not-json.json "{ this is not a scene")
+  foreach(bad ${OUT}/no-such-file.vdb ${OUT}/not-json.json)
+    run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --drop ${bad} --screenshot ${OUT}/failed-drop.png
+                --after 1.5 --quit)
+    get_filename_component(name ${bad} NAME)
+    expect_contains("${LAST_OUTPUT}" "could not open ${bad}")
+    expect_contains("${LAST_OUTPUT}" "still showing the last good scene")
+    if(LAST_OUTPUT MATCHES "reloading|changed on disk")
+      message(FATAL_ERROR "a failed drop of ${name} reloaded the scene on screen")
+    endif()
+    metadata(${OUT}/failed-drop.png document document)
+    if(NOT document STREQUAL "${SCENE}")
+      message(FATAL_ERROR "after a failed drop of ${name} the document is ${document}")
+    endif()
+  endforeach()
+elseif(MODE STREQUAL "relative")
+  # Bare file names in the working folder, as `candela plume.vdb` is typed: open, Save As out.json,
+  # then reopen out.json and Save As again; every path relative.
+  run_checked(${CLI} generate plume --resolution 24 -o ${OUT}/plume.vdb)
+  file(WRITE ${OUT}/relative.sh
+       "cd ${OUT} && ${VIEWER} plume.vdb --set camera.resolution=[160,90] --save-as out.json --screenshot first.png --after-spp 4 --quit &&
+        ${VIEWER} out.json --edit volumes.0.g=0.25 --save-as again.json --screenshot second.png --after-spp 4 --quit
+")
+  run_checked(${XVFB} sh ${OUT}/relative.sh)
+  expect_contains("${LAST_OUTPUT}" "saved out.json")
+  expect_contains("${LAST_OUTPUT}" "saved again.json")
+  if(LAST_OUTPUT MATCHES "save failed|cannot make absolute")
+    message(FATAL_ERROR "saving by a bare file name failed")
+  endif()
+  file(READ ${OUT}/again.json saved)
+  string(JSON file GET "${saved}" volumes 0 file)
+  string(JSON g GET "${saved}" volumes 0 g)
+  if(NOT file STREQUAL "plume.vdb" OR NOT g MATCHES "^0\\.25")
+    message(FATAL_ERROR "again.json: volume file ${file}, g ${g}")
+  endif()
+  # The opened VDB's exposure is saved as auto exposure chose it, or, saved before the first image
+  # chose one, left out (auto again on reopening); never a 0 nobody chose.
+  file(READ ${OUT}/out.json saved)
+  string(JSON exposure ERROR_VARIABLE missing GET "${saved}" display exposure)
+  metadata(${OUT}/first.png display display)
+  string(JSON shown GET "${display}" exposure)
+  message("out.json: exposure ${exposure}${missing}; shown ${shown}")
+  if(NOT missing AND NOT exposure EQUAL shown)
+    message(FATAL_ERROR "out.json saved exposure ${exposure}; the viewer showed ${shown}")
+  endif()
+elseif(MODE STREQUAL "exposure")
+  # A shipped scene that gives no exposure opens exposed by its own image: the torch's handle, the
+  # ground and the mist's glow read, not just the flame.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --screenshot ${OUT}/default.png --after-spp 8 --quit)
+  expect_contains("${LAST_OUTPUT}" "auto exposure:")
+  metadata(${OUT}/default.png display display)
+  string(JSON exposure GET "${display}" exposure)
+  halves(${OUT}/default.png left right levels)
+  message("default view: exposure ${exposure}, mean levels left ${left} right ${right}")
+  if(exposure LESS 1 OR left LESS 40 OR right LESS 40)
+    message(FATAL_ERROR "the default view is dark: exposure ${exposure}, mean levels ${left} / ${right}")
+  endif()
+  # A scene that gives its exposure keeps it.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --set display.exposure=0.5 --screenshot ${OUT}/given.png
+              --after-spp 4 --quit)
+  metadata(${OUT}/given.png display display)
+  string(JSON exposure GET "${display}" exposure)
+  if(NOT exposure EQUAL 0.5)
+    message(FATAL_ERROR "a scene's own exposure 0.5 was replaced by ${exposure}")
+  endif()
+  # A PNG sequence from the CLI: one exposure for every frame (the first frame's).
+  foreach(f 1 2 3)
+    run_checked(${CLI} generate plume --seed ${f} --resolution 32 -o ${OUT}/seq/fire.000${f}.vdb)
+  endforeach()
+  run_checked(${CLI} render ${OUT}/seq/fire.0001.vdb --frames 1-3 --spp 2 --set camera.resolution=[64,36] -o ${OUT}/png/fire.PNG)
+  set(exposures "")
+  foreach(f 1 2 3)
+    metadata(${OUT}/png/fire.000${f}.PNG exposure e)
+    list(APPEND exposures ${e})
+  endforeach()
+  list(REMOVE_DUPLICATES exposures)
+  list(LENGTH exposures distinct)
+  if(NOT distinct EQUAL 1 OR exposures STREQUAL "0.000000")
+    message(FATAL_ERROR "a PNG sequence's frames got exposures ${exposures}: expected one auto exposure for all")
+  endif()
 elseif(MODE STREQUAL "save")
   # Edit, save as, reopen: the reopened scene renders the same samples as the edited one.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[160,90] --edit volumes.1.g=0.3
@@ -322,7 +417,7 @@ elseif(MODE STREQUAL "undo")
 elseif(MODE STREQUAL "snapshot")
   # A snapshot at 4 spp, then the exposure up 3 stops: the wipe shows the brighter live render left
   # of the divider and the snapshot, as it was seen, right of it.
-  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --snapshot-compare --edit display.exposure=3
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --set display.exposure=0 --snapshot-compare --edit display.exposure=3
               --screenshot ${OUT}/snap.png --after-spp 4 --quit)
   metadata(${OUT}/snap-compare.png compare_mode mode)
   metadata(${OUT}/snap-compare.png compared_snapshot snapshot)

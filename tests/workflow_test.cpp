@@ -195,6 +195,7 @@ TEST(SaveScene, SavedSceneReopensToTheSameImage) {
   scene.volumes[0].g = 0.4f;
   scene.volumes[0].emission.intensity = 2.0f;
   scene.display.exposure = 1.5f;
+  scene.display.autoExposure = false;  // the artist's exposure (an opened VDB starts with auto exposure)
   scene.description = "saved by the test";
   fs::create_directories(dir / "looks");
   const std::string savedPath = (dir / "looks" / "plume-look.json").string();
@@ -210,6 +211,27 @@ TEST(SaveScene, SavedSceneReopensToTheSameImage) {
   saveSceneDesc(reopened, savedPath);
   EXPECT_FALSE(fs::exists(savedPath + ".saving"));
   EXPECT_EQ(sceneToJson(loadSceneDesc(savedPath)), sceneToJson(reopened));
+}
+
+// `candela plume.vdb` then Save As `out.json`, both bare names in the working folder: the paths
+// have no parent folder, and saving must still resolve them against the working folder.
+TEST(SaveScene, BareFileNamesInTheWorkingFolder) {
+  const fs::path dir = test::scratchDirectory("save-bare");
+  const fs::path before = fs::current_path();
+  fs::current_path(dir);
+  GeneratorDesc gen;
+  gen.type = "plume";
+  gen.resolution = 16;
+  writeGeneratedVolume(gen, "plume.vdb");
+  const SceneDesc scene = sceneFromVdb("plume.vdb");
+  EXPECT_EQ(scene.path, "plume.json");
+  SceneDesc saved;
+  EXPECT_NO_THROW(saved = saveSceneDesc(scene, "out.json"));
+  EXPECT_EQ(saved.volumes[0].file, "plume.vdb");
+  EXPECT_NO_THROW(saveSceneDesc(loadSceneDesc("out.json"), "again.json"));
+  fs::current_path(before);
+  EXPECT_TRUE(fs::exists(dir / "out.json"));
+  EXPECT_EQ(toJson(loadSceneDesc((dir / "again.json").string()).volumes[0]), toJson(saved.volumes[0]));
 }
 
 TEST(SaveScene, ASceneFileRoundTripsEveryField) {

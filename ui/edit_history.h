@@ -27,12 +27,12 @@ class EditHistory {
   void amend(const nlohmann::json& state) {
     if (!states_.empty()) states_[current_] = state;
   }
-  // An automatic change that holds for the whole document, not for one step (auto exposure on open):
-  // every state that still has `from` at `pointer` takes `to`. An edit made before the change came
-  // is undone without undoing the change with it.
-  void amendEverywhere(const nlohmann::json::json_pointer& pointer, const nlohmann::json& from, const nlohmann::json& to) {
+  // An automatic choice that holds for the whole document, not for one step (auto exposure on open):
+  // every state with no value at `pointer` takes `value`. An edit made before the choice came is
+  // undone without undoing the choice with it, and a state that has its own value keeps it.
+  void fillEverywhere(const nlohmann::json::json_pointer& pointer, const nlohmann::json& value) {
     for (auto& state : states_)
-      if (state.contains(pointer) && state.at(pointer) == from) state.at(pointer) = to;
+      if (!state.contains(pointer)) state[pointer] = value;
   }
   // Records the state after an edit. An edit in the same open group as the previous one replaces it;
   // a state equal to the current one records nothing. Any redo steps are dropped.

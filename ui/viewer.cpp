@@ -64,6 +64,11 @@ Viewer::Viewer(GLFWwindow* window, const ViewerOptions& options)
     auto* self = static_cast<Viewer*>(glfwGetWindowUserPointer(w));
     for (int i = 0; i < count; ++i) self->droppedPaths_.push_back(paths[i]);
   });
+  // Key presses are queued as GLFW reports them (ImGui's backend, installed after us, chains to this).
+  glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
+    auto* self = static_cast<Viewer*>(glfwGetWindowUserPointer(w));
+    if (self && key >= 0 && action != GLFW_RELEASE) self->keys_.push({key, mods, action == GLFW_REPEAT});
+  });
   // Closing the window with unsaved edits asks first.
   glfwSetWindowCloseCallback(window_, [](GLFWwindow* w) {
     glfwSetWindowShouldClose(w, GLFW_FALSE);
@@ -105,18 +110,17 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     sceneTime_ = modificationTime(path);
     importSummary_ = vdb ? imported.summary() : "";
     if (vdb) report("opened " + path + " as a volume: " + importSummary_);
-    // The look the file was saved with; a bare VDB gets an exposure that shows it once it renders.
+    // The look the file was saved with; a file that gives no exposure (a bare VDB, a scene without
+    // display.exposure) gets one that shows it once it renders (pollSession).
     display_ = colors_.resolve(desc.display);
-    autoExposurePending_ = vdb;
     applyDisplay();
-    openedExposure_ = display_.exposure;
     edited_ = desc;
     edited_.display = display_;
     frames_ = sceneFrames(desc);
     unloadableFrames_.clear();
     playing_ = false;
     history_.reset(lookState());
-    dirty_ = vdb;  // an opened VDB is a new, unsaved scene
+    dirty_ = false;  // an opened VDB is untitled (Save asks where) but holds no edits yet
     comparedSnapshot_ = 0;
     openStart_ = ViewerClock::now();
     openLatencyPending_ = true;
@@ -125,9 +129,10 @@ void Viewer::openScene(const std::string& path, const std::vector<std::string>& 
     pendingOpen_ = session_.open(desc);
     updateTitle();
   } catch (const std::exception& e) {
-    report(std::string(e.what()) + (haveScene_ ? " (still showing the last good scene)" : ""));
-    if (!haveScene_) scenePath_ = path;  // watch it, so fixing the file loads it
-    sceneTime_ = modificationTime(path);
+    report(std::string("could not open ") + path + ": " + e.what() + (haveScene_ ? " (still showing the last good scene)" : ""));
+    // With a scene on screen nothing changes: the document, its file watch and its samples stay.
+    // Without one, watch the file that failed, so fixing it loads it.
+    if (!haveScene_) scenePath_ = path, sceneTime_ = modificationTime(path);
   }
 }
 
@@ -216,7 +221,9 @@ void Viewer::applySettingEdit(const std::string& assignment) {
 }
 
 void Viewer::setDisplay(const DisplaySettings& display, const std::string& group) {
+  const bool exposureSet = display.exposure != display_.exposure;
   display_ = colors_.resolve(display);
+  if (exposureSet) display_.autoExposure = false;  // the artist's exposure, never replaced
   applyDisplay();
   recordEdit(group);
 }
@@ -386,20 +393,26 @@ void Viewer::pollSession() {
       reframeOnNextImage_ = false;
       frameVolume();
     }
-    // Auto exposure on open: from the first image with a few samples, so noise does not decide it.
-    // Not over an exposure the artist set while the file loaded.
-    if (autoExposurePending_ && display_.exposure != openedExposure_) autoExposurePending_ = false;
-    if (autoExposurePending_ && full && latest->film.spp() >= 4 && !pendingOpen_ && latest->request >= openedRequest_) {
-      autoExposurePending_ = false;
-      const float opened = display_.exposure;
-      display_.exposure = autoExposureStops(latest->film.meanImage());
-      applyDisplay();
-      // Edits made before the first image (the undo steps under this one) keep it too.
-      history_.amendEverywhere(nlohmann::json::json_pointer("/display/exposure"), opened, display_.exposure);
-      history_.amend(lookState());
-      report("auto exposure: " + std::to_string(display_.exposure).substr(0, 5) + " stops");
-    }
   }
+  // Auto exposure: from the first image of the document with a few samples, so noise does not decide
+  // it; checked on the image shown rather than on a new one, since a render that reached its limit
+  // while another file loaded (and failed) sends none. An exposure the artist set clears
+  // autoExposure (setDisplay).
+  if (display_.autoExposure && frame_ && !frame_->preview && frame_->film.spp() >= 4 && !pendingOpen_ && frame_->request >= openedRequest_)
+    chooseExposure(frame_->film.meanImage());
+}
+
+void Viewer::chooseExposure(const std::vector<float>& rgb) {
+  display_.exposure = autoExposureStops(rgb);
+  display_.autoExposure = false;
+  applyDisplay();
+  // Every undo step that had no exposure of its own takes this one (edits made before the first
+  // image keep it too); a step whose exposure the artist set keeps that.
+  history_.fillEverywhere(nlohmann::json::json_pointer("/display/exposure"), display_.exposure);
+  history_.amend(lookState());
+  char text[64];
+  std::snprintf(text, sizeof(text), "auto exposure: %+.2f stops (E / Shift+E to change)", display_.exposure);
+  report(text);
 }
 
 void Viewer::restoreDocumentBeforeOpen() {
@@ -426,7 +439,6 @@ void Viewer::restoreDocumentBeforeOpen() {
   unloadableFrames_.clear();
   fileScene_ = d.fileScene;
   beforeOpen_.reset();
-  autoExposurePending_ = false;
   openLatencyPending_ = false;
   edited_.display = display_;
   applyDisplay();
@@ -644,6 +656,8 @@ int Viewer::run() {
       glfwWaitEventsTimeout(0.5);
     }
     busyFrames_ = std::max(0, busyFrames_ - 1);
+    framePresses_ = keys_.take();
+    if (!framePresses_.empty()) busyFrames_ = 3;
     try {
       pollSession();
       pollComparison();
@@ -780,8 +794,6 @@ int runViewer(const ViewerOptions& options) {
     return 2;
   }
   glfwMakeContextCurrent(window);
-  // Keys are polled once a frame; sticky keys keep a press that was released between two frames.
-  glfwSetInputMode(window, GLFW_STICKY_KEYS, GLFW_TRUE);
   glfwSwapInterval(0);  // our own frame pacing; vsync would add a frame of latency
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();

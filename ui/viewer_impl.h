@@ -34,6 +34,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -51,18 +52,25 @@ std::filesystem::file_time_type modificationTime(const std::string& path);
 // Whether two looks render differently (not only in how they are displayed).
 bool rendersDifferently(const SceneDesc& a, const SceneDesc& b);
 
-// Edge-triggered key presses from GLFW (ImGui 1.86 has no named keys for letters).
-class Keys {
+// Every key press GLFW reports, in order, kept until the next UI frame handles it: a key pressed and
+// released between two frames, or pressed eight times, counts as often as it was pressed (ImGui 1.86
+// sees only the keys held at a frame, and has no named keys for letters).
+struct KeyPress {
+  int key = 0;
+  int mods = 0;  // GLFW_MOD_* at the press
+  bool repeat = false;
+  bool ctrl() const { return (mods & GLFW_MOD_CONTROL) != 0; }
+  bool shift() const { return (mods & GLFW_MOD_SHIFT) != 0; }
+};
+
+class KeyQueue {
  public:
-  bool pressed(GLFWwindow* w, int key) {
-    const bool down = glfwGetKey(w, key) == GLFW_PRESS;
-    const bool was = down_[key];
-    down_[key] = down;
-    return down && !was;
-  }
+  void push(const KeyPress& k) { pending_.push_back(k); }
+  // The presses since the last call, oldest first.
+  std::vector<KeyPress> take() { return std::exchange(pending_, {}); }
 
  private:
-  bool down_[GLFW_KEY_LAST + 1] = {};
+  std::vector<KeyPress> pending_;
 };
 
 class Viewer {
@@ -99,6 +107,8 @@ class Viewer {
   void requestQuit();  // the window's close button, Ctrl+Q, File > Quit: asks about unsaved edits
   void report(const std::string& text);
   void applyDisplay();
+  // Auto exposure from this image, for the document (display_.autoExposure was set: no exposure given).
+  void chooseExposure(const std::vector<float>& rgb);
   void setDisplay(const DisplaySettings& display, const std::string& group = "display");
   void pollSession();
   void pollSceneFile();
@@ -175,8 +185,6 @@ class Viewer {
   EditHistory history_;
   bool gestureActive_ = false;  // a drag or a widget edit in progress: its edits are one undo step
   ViewerClock::time_point lastWheel_;
-  bool autoExposurePending_ = false;
-  float openedExposure_ = 0.0f;  // the exposure an open started with: auto exposure never replaces the artist's
   bool reframeOnNextImage_ = false;  // after the up axis changes: frame the volume once it is rebuilt
   std::string importSummary_;
   std::string title_;
@@ -249,7 +257,9 @@ class Viewer {
   std::unique_ptr<FramePrefetcher> prefetcher_;
   int prefetchedFrame_ = INT_MIN;
 
-  Keys keys_;
+  KeyQueue keys_;
+  std::vector<KeyPress> framePresses_;  // this UI frame's presses, taken once at its start
+  bool pressedThisFrame(int key) const;
   int dragButton_ = -1;
   GuideInspectorView inspector_;  // Ctrl+click on a pixel
 

@@ -159,10 +159,9 @@ void Viewer::drawDialogs() {
     showDiscard_ = false;
     ImGui::OpenPopup("Unsaved edits");
   }
-  // Keys through GLFW's sticky state: a press and release between two frames is not lost (ImGui 1.86
-  // only sees keys held at a frame).
-  const bool enterKey = keys_.pressed(window_, GLFW_KEY_ENTER), dKey = keys_.pressed(window_, GLFW_KEY_D),
-             escapeKey = keys_.pressed(window_, GLFW_KEY_ESCAPE);
+  // Keys from the queue: a press and release between two frames is not lost.
+  const bool enterKey = pressedThisFrame(GLFW_KEY_ENTER), dKey = pressedThisFrame(GLFW_KEY_D),
+             escapeKey = pressedThisFrame(GLFW_KEY_ESCAPE);
   if (ImGui::BeginPopupModal("Unsaved edits", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::Text("%s has unsaved edits.", documentPath_.empty() ? "The scene" : fs::path(documentPath_).filename().string().c_str());
     ImGui::Text("Save them before you %s?", discardWhat_.c_str());
@@ -202,54 +201,70 @@ void Viewer::toggleReadoutLock() {
   else if (compare_ && compFrame_) canvas_.toggleReadoutLock(compFrame_->width, compFrame_->height);
 }
 
+bool Viewer::pressedThisFrame(int key) const {
+  return std::any_of(framePresses_.begin(), framePresses_.end(), [key](const KeyPress& k) { return k.key == key && !k.repeat; });
+}
+
+// Every press queued since the last frame, in order (KeyQueue): eight presses of E are four stops.
 void Viewer::handleKeys() {
   ImGuiIO& io = ImGui::GetIO();
-  // Modifiers through GLFW's sticky keys as well as ImGui: a chord pressed and released between two
-  // frames (a fast typist, or xdotool in the GUI tests) still counts.
-  auto held = [&](int left, int right) { return glfwGetKey(window_, left) == GLFW_PRESS || glfwGetKey(window_, right) == GLFW_PRESS; };
-  const bool ctrl = held(GLFW_KEY_LEFT_CONTROL, GLFW_KEY_RIGHT_CONTROL) || io.KeyCtrl;
-  const bool shift = held(GLFW_KEY_LEFT_SHIFT, GLFW_KEY_RIGHT_SHIFT) || io.KeyShift;
-  // Query every key each frame so edges are tracked even while a text field has focus.
-  auto pressed = [&](int key) { return keys_.pressed(window_, key); };
-  const bool f = pressed(GLFW_KEY_F), r = pressed(GLFW_KEY_R), home = pressed(GLFW_KEY_HOME), l = pressed(GLFW_KEY_L),
-             s = pressed(GLFW_KEY_S), f12 = pressed(GLFW_KEY_F12), c = pressed(GLFW_KEY_C), o = pressed(GLFW_KEY_O),
-             e = pressed(GLFW_KEY_E), zero = pressed(GLFW_KEY_0), z = pressed(GLFW_KEY_Z), y = pressed(GLFW_KEY_Y),
-             k = pressed(GLFW_KEY_K), q = pressed(GLFW_KEY_Q), left = pressed(GLFW_KEY_LEFT), right = pressed(GLFW_KEY_RIGHT),
-             space = pressed(GLFW_KEY_SPACE);
-  if (io.WantCaptureKeyboard) return;
+  if (io.WantCaptureKeyboard) return;  // typed into a field
   if (ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopup)) return;
-  if (ctrl) {
-    if (z && shift) redo();
-    else if (z) undo();
-    if (y) redo();
-    if (s && shift) showSaveAs_ = true;
-    else if (s) requestSave();
-    if (o) showOpen_ = true;
-    if (q) requestQuit();
-    return;
+  for (const KeyPress& k : framePresses_) {
+    // Held keys repeat only where holding means "more": exposure and the timeline.
+    if (k.repeat && k.key != GLFW_KEY_E && k.key != GLFW_KEY_LEFT && k.key != GLFW_KEY_RIGHT) continue;
+    if (k.ctrl()) {
+      switch (k.key) {
+        case GLFW_KEY_Z: k.shift() ? redo() : undo(); break;
+        case GLFW_KEY_Y: redo(); break;
+        case GLFW_KEY_S: k.shift() ? void(showSaveAs_ = true) : requestSave(); break;
+        case GLFW_KEY_O: showOpen_ = true; break;
+        case GLFW_KEY_Q: requestQuit(); break;
+        default: break;
+      }
+      continue;
+    }
+    switch (k.key) {
+      case GLFW_KEY_F:
+        if (haveScene_) frameVolume();
+        break;
+      case GLFW_KEY_R:
+      case GLFW_KEY_HOME:
+        if (haveScene_) resetCamera();
+        break;
+      case GLFW_KEY_L: toggleReadoutLock(); break;
+      case GLFW_KEY_S:
+      case GLFW_KEY_F12: screenshot(""); break;
+      case GLFW_KEY_C: {
+        DisplaySettings d = display_;
+        d.channel = static_cast<ChannelView>((static_cast<int>(d.channel) + 1) % 5);
+        setDisplay(d);
+        break;
+      }
+      case GLFW_KEY_E: {  // exposure: E up, Shift+E down
+        DisplaySettings d = display_;
+        d.exposure += k.shift() ? -0.5f : 0.5f;
+        d.autoExposure = false;
+        setDisplay(d);
+        break;
+      }
+      case GLFW_KEY_K:
+        if (k.shift()) showSnapshots_ = !showSnapshots_;
+        else takeSnapshot();
+        break;
+      case GLFW_KEY_LEFT:
+        if (!frames_.empty()) setFrame(neighbourFrame(-1));
+        break;
+      case GLFW_KEY_RIGHT:
+        if (!frames_.empty()) setFrame(neighbourFrame(+1));
+        break;
+      case GLFW_KEY_SPACE:
+        if (!frames_.empty()) playing_ = !playing_;
+        break;
+      case GLFW_KEY_0: canvas_.resetZoom(); break;
+      default: break;
+    }
   }
-  if (f && haveScene_) frameVolume();
-  if ((r || home) && haveScene_) resetCamera();
-  if (l) toggleReadoutLock();
-  if (f12 || s) screenshot("");
-  if (c) {
-    DisplaySettings d = display_;
-    d.channel = static_cast<ChannelView>((static_cast<int>(d.channel) + 1) % 5);
-    setDisplay(d);
-  }
-  if (e) {  // exposure: E up, Shift+E down
-    DisplaySettings d = display_;
-    d.exposure += shift ? -0.5f : 0.5f;
-    setDisplay(d);
-  }
-  if (k && shift) showSnapshots_ = !showSnapshots_;
-  else if (k && frame_ && !compare_) takeSnapshot();
-  if (!frames_.empty()) {
-    if (left) setFrame(neighbourFrame(-1));
-    if (right) setFrame(neighbourFrame(+1));
-    if (space) playing_ = !playing_;
-  }
-  if (zero) canvas_.resetZoom();
 }
 
 }  // namespace candela
