@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Candela look-dev viewer: progressive volume path tracing with live edits and OCIO display"};
   app.add_option("scene", o.scenePath,
                  "Scene JSON, or a .vdb to open as a volume: grids recognised by name, framed, lit by a sun and sky, auto exposure "
-                 "(default: assets/scenes/torch-in-mist.json)");
+                 "(default: the talk's Fig. 1 live: assets/scenes/torch-in-mist.json in four equal-time panes, conventional, "
+                 "emission, full and auto)");
   app.add_option("--up", o.upAxis, "Opening a .vdb: its up axis, auto (Z when Blender wrote it, else Y), y or z")
       ->check(CLI::IsMember({"auto", "y", "z"}));
   std::string presets;
@@ -30,9 +31,12 @@ int main(int argc, char** argv) {
   app.add_option("--ocio", o.ocioConfig, "OCIO config (default: $OCIO, else assets/ocio/config.ocio)");
   app.add_option("--threads", o.threads, "Render threads (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--size", o.windowWidth, "Window width in pixels")->check(CLI::Range(320, 8192));
-  app.add_option("--screenshot", o.screenshotPath, "Write a screenshot (PNG as displayed + scene-linear EXR) to this path");
+  app.add_option("--screenshot", o.screenshotPath,
+                 "Write a screenshot (PNG as displayed + scene-linear EXR) to this path; in the comparison, the figure plus a PNG and "
+                 "an EXR per pane");
   auto after = app.add_option("--after", o.afterSeconds, "Screenshot after this many seconds of rendering")->check(candela::finitePositive());
-  app.add_option("--after-spp", o.afterSpp, "Screenshot at exactly this many samples per pixel (also stops there)")
+  app.add_option("--after-spp", o.afterSpp,
+                 "Screenshot at exactly this many samples per pixel (also stops there); in the comparison, once every pane has as many")
       ->check(candela::finitePositive())
       ->excludes(after);
   app.add_flag("--quit", o.quit, "Quit after the screenshot (or at once when there is none)");
@@ -88,8 +92,24 @@ int main(int argc, char** argv) {
     }
   // No scene and no other mode: the talk's Fig. 1 live, conventional | + emission | + scattering (MIS),
   // and beside them what Candela chooses by itself (auto, the default for the artist's own scenes).
-  if (o.scenePath.empty() && o.panes.empty() && o.preset.empty() && o.screenshotPath.empty() && o.measureEdits == 0 && o.dropPath.empty())
-    o.panes = {"conventional", "emission", "full", "auto"};
+  // A screenshot, --after and --quit keep it (the screenshot is the figure and every pane); a preset
+  // or a flag that works on one view opens the default scene alone, and says so.
+  if (o.scenePath.empty() && o.panes.empty() && o.preset.empty()) {
+    std::string single;
+    if (o.measureEdits > 0) single = "--measure-latency";
+    else if (!o.dropPath.empty()) single = "--drop";
+    else if (!o.editsAfterStart.empty()) single = "--edit";
+    else if (!o.inspectPixel.empty()) single = "--inspect";
+    else if (!o.saveAsPath.empty()) single = "--save-as";
+    else if (o.snapshotCompare) single = "--snapshot-compare";
+    else if (o.frameSteps > 0 || o.play) single = o.play ? "--play" : "--frame-steps";
+    else if (o.undoSteps > 0 || o.redoSteps > 0 || o.resetCamera) single = "--undo/--redo/--reset-camera";
+    if (single.empty())
+      o.panes = {"conventional", "emission", "full", "auto"};
+    else
+      std::fprintf(stderr, "candela: %s works on one view: opening the default scene alone (name a scene, or --panes, to choose)\n",
+                   single.c_str());
+  }
   if (!o.figurePath.empty() && (o.panes.empty() || o.equalTime <= 0.0)) {
     std::fprintf(stderr, "candela: --figure needs --panes and --equal-time\n");
     return 2;

@@ -87,30 +87,41 @@ void ComparisonSession::workerLoop() {
     if (request) {
       panes.clear();
       state = std::make_shared<ComparisonFrame>();
-      state->status = "building the scenes";
+      state->width = request->scene.camera.resolution.first;
+      state->height = request->scene.camera.resolution.second;
+      // Every pane is listed at once, each saying it is being prepared until its scene is built.
+      for (const auto& spec : request->panes) {
+        PaneState s;
+        s.label = spec.label;
+        s.strategy = spec.strategy;
+        state->panes.push_back(s);
+      }
+      state->status = "preparing the panes";
       publish(std::make_shared<ComparisonFrame>(*state));
       try {
-        for (const auto& spec : request->panes) {
+        for (size_t i = 0; i < request->panes.size(); ++i) {
           SceneDesc desc = request->scene;
-          desc.strategy = spec.strategy;
+          desc.strategy = request->panes[i].strategy;
           Pane p;
           p.scene = Scene::build(desc);
           p.renderer = std::make_unique<ProgressiveRenderer>(p.scene, options_);
           panes.push_back(std::move(p));
-          PaneState s;
-          s.label = spec.label;
-          s.strategy = spec.strategy;
+          PaneState& s = state->panes[i];
+          s.preparing = false;
           // auto's decision is charged to its pane's time, as bench and report charge it (not the
           // probes' learning, which no fixed preset is charged either), and its kept pilot samples
           // start the pane's image.
           if (const AutoDecision* d = panes.back().scene->autoDecision()) {
             s.seconds = d->chargedSeconds();
+            s.autoChoice = d->label();
+            s.autoSummary = d->summary();
             panes.back().film = continueFromPilot(*panes.back().scene, 0);
+            if (panes.back().film.spp() > 0) s.film = std::make_shared<const Film>(panes.back().film);
           }
-          state->panes.push_back(s);
+          publish(std::make_shared<ComparisonFrame>(*state));
         }
         reference.clear();
-        const int w = request->scene.camera.resolution.first, h = request->scene.camera.resolution.second;
+        const int w = state->width, h = state->height;
         if (!request->reference.rgb.empty()) {
           if (request->reference.width != w || request->reference.height != h)
             throw InputError("reference: expected a " + std::to_string(w) + "x" + std::to_string(h) + " image, got " +
@@ -122,8 +133,6 @@ void ComparisonSession::workerLoop() {
           publish(std::make_shared<ComparisonFrame>(*state));
           reference = cachedReference(request->scene, request->referenceStrategy, request->referenceSpp, options_.threads).rgb;
         }
-        state->width = w;
-        state->height = h;
         state->hasReference = !reference.empty();
         if (state->hasReference) state->reference = std::make_shared<const std::vector<float>>(reference);
         state->status.clear();
@@ -158,7 +167,11 @@ void ComparisonSession::workerLoop() {
     ps.film = std::make_shared<const Film>(pane.film);
     if (!reference.empty()) {
       const ErrorMetrics e = imageError(pane.film.meanImage(), reference);
-      ps.series.push_back({ps.seconds, pane.film.spp(), e.mse, e.relmse});
+      ps.series.push_back({ps.seconds, pane.film.spp(), e.mse, e.relmse, false});
+    } else if (pane.film.spp() >= 2) {
+      // No reference: the render's own error estimate, its sample variance over its spp.
+      const double n = pane.film.spp();
+      ps.series.push_back({ps.seconds, pane.film.spp(), variancePerSample(pane.film) / n, relativeVariancePerSample(pane.film) / n, true});
     }
     // Agreement of region means, every second (it reads every film). Pairwise z-tests (unequal
     // variances) need enough samples for heavy-tailed estimators' standard errors to be honest, so
@@ -204,9 +217,29 @@ std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films, cons
   return out;
 }
 
+std::string strategyInWords(const std::string& name) {
+  const std::string base = name.substr(0, name.find(','));
+  std::string words = base == "conventional" ? "tracking only"
+                      : base == "emission"   ? "emission sampling"
+                      : base == "full"       ? "emission + scattering sampling"
+                      : base == "equiangular" ? "emission + equiangular sampling"
+                                              : base;
+  if (base != name) words += " (" + name.substr(name.find(',') + 2) + ")";
+  return words;
+}
+
+std::string paneTitle(const PaneState& pane) {
+  const bool edited = !pane.label.empty() && pane.label.back() == '*';
+  if (pane.strategy.preset == "auto" && !edited)
+    return pane.autoChoice.empty() ? std::string(pane.preparing ? "auto: choosing" : "auto")
+                                   : "auto: chose " + strategyInWords(pane.autoChoice);
+  return strategyInWords(pane.strategy.preset) + (edited ? " (edited)" : "");
+}
+
 std::string comparisonCsv(const ComparisonFrame& frame) {
   std::ostringstream out;
   out << "# relMSE = " << kRelMseFormula << "\n";
+  if (!frame.hasReference) out << "# no reference: each pane's error is its own estimate, sample variance / spp\n";
   out << "pane,seconds,spp,mse,relmse,efficiency\n";
   for (const auto& p : frame.panes)
     for (const auto& s : p.series)

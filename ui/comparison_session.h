@@ -2,8 +2,10 @@
 // same scene and camera, each with its own strategy settings. One worker interleaves time slices of
 // about 60 ms with the same thread count, always giving the next slice to the pane with the least
 // render time, so at any moment the panes have had the same CPU time to within one slice. With a
-// reference image each pane gets an error-versus-time series (MSE, relMSE) and every pane's region
-// means are tested against the others' (a biased strategy shows as disagreeing).
+// reference image each pane gets an error-versus-time series (MSE, relMSE) against it; without one,
+// the series is each pane's own estimate (its pixels' sample variance over spp: the MSE of an
+// unbiased render, docs/method.md s.5). Every pane's region means are tested against the others'
+// (a biased strategy shows as disagreeing).
 // No GL: the viewer draws it, tests drive it headless.
 #pragma once
 
@@ -37,11 +39,15 @@ struct ErrorSample {
   int spp = 0;
   double mse = 0.0;
   double relmse = 0.0;
+  bool estimated = false;  // from the pane's own variance (no reference)
 };
 
 struct PaneState {
   std::string label;
   StrategySettings strategy;
+  bool preparing = true;             // its scene is being built (auto: deciding) and it has no image
+  std::string autoChoice;            // auto's pane: the candidate it chose ("full", ...); empty otherwise
+  std::string autoSummary;           // auto's pane: its decision in one line (AutoDecision::summary)
   std::shared_ptr<const Film> film;  // null until the first pass
   double seconds = 0.0;              // render time this pane has had (auto's pilot included)
   double lastSlice = 0.0;            // duration of its latest pass (equal time holds to one slice)
@@ -59,7 +65,7 @@ struct ComparisonFrame {
   int width = 0, height = 0;
   bool hasReference = false;
   std::shared_ptr<const std::vector<float>> reference;  // interleaved RGB, the panes' size
-  std::string status;  // "building", "rendering the reference (N spp)", "" while comparing
+  std::string status;  // "preparing", "rendering the reference (N spp)", "" while comparing
 };
 
 class ComparisonSession {
@@ -108,6 +114,12 @@ class ComparisonSession {
 // odd one out and the others still agree. `worst` reads "vs LABEL: region ..." (or "pane J: ..."
 // without labels).
 std::vector<Agreement> paneAgreement(const std::vector<const Film*>& films, const std::vector<std::string>& labels = {});
+
+// A pane's title in an artist's words: what its strategy does, and for auto what it chose
+// ("auto: chose emission + scattering sampling"). An edited preset's label ends in "*".
+std::string paneTitle(const PaneState& pane);
+// What a preset (or auto's candidate, "conventional, gathering" included) samples, in words.
+std::string strategyInWords(const std::string& presetOrCandidate);
 
 // The error series of every pane as CSV: pane,seconds,spp,mse,relmse,efficiency.
 std::string comparisonCsv(const ComparisonFrame& frame);

@@ -115,7 +115,19 @@ void ScriptedDriver::step(Viewer& v) {
       for (const auto& p : frame->panes) done = done && p.film && p.seconds >= o.equalTime;
       if (done) v.writeFigure(o.figurePath);
     }
-    if (o.quit && (o.figurePath.empty() || v.figureDone_)) v.quitNow_ = true;
+    // --screenshot: the figure and every pane, once every pane has the spp or seconds asked for.
+    if (!o.screenshotPath.empty() && !screenshotDone_ && frame && frame->status.empty() && !frame->panes.empty()) {
+      bool ready = true;
+      for (const auto& p : frame->panes)
+        ready = ready && p.film && !p.preparing && (o.afterSpp > 0 ? p.film->spp() >= o.afterSpp : p.seconds >= o.afterSeconds);
+      if (ready) {
+        screenshotDone_ = true;
+        if (!v.screenshot(o.screenshotPath)) v.exitCode_ = 1;
+      }
+    }
+    const bool figureWritten = v.figureDone_ && !v.figureRequest_;
+    if (o.quit && (o.figurePath.empty() || figureWritten) && (o.screenshotPath.empty() || (screenshotDone_ && figureWritten)))
+      v.quitNow_ = true;
     if (o.quit && !frame && std::chrono::duration<double>(Clock::now() - start_).count() > 5.0) {
       v.report("the comparison could not start; quitting");
       v.exitCode_ = 1;

@@ -576,6 +576,9 @@ void Viewer::startComparisonMode(const std::string& path) {
     edited_ = fileScene_ = loadSceneDesc(path, options_.settings);
     sceneTime_ = modificationTime(path);
     haveScene_ = true;
+    // The file's look; with no exposure in it, one for every pane from the first pane image.
+    display_ = colors_.resolve(edited_.display);
+    applyDisplay();
     history_.reset(lookState());
     for (const auto& name : options_.panes) paneSpecs_.push_back({name, strategyPreset(name, "--panes")});
     canvas_.setWipe(options_.wipe && paneSpecs_.size() == 2);
@@ -622,6 +625,13 @@ void Viewer::pollComparison() {
     paneDirty_.push_back(true);
   }
   uploadPanes();
+  // One exposure for every pane, chosen once from the first pane image with a few samples.
+  if (display_.autoExposure)
+    for (const auto& p : latest->panes)
+      if (p.film && p.film->spp() >= 4) {
+        chooseExposure(p.film->meanImage());
+        break;
+      }
 }
 
 void Viewer::uploadPanes() {

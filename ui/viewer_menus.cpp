@@ -18,8 +18,9 @@ void Viewer::drawMenuBar() {
     if (ImGui::MenuItem("Reload scene", nullptr, false, !scenePath_.empty()))
       confirmDiscard("reload", [this] { openScene(scenePath_, sceneSettings_, scenePreset_); });
     ImGui::Separator();
-    if (ImGui::MenuItem("Save screenshot", "S / F12", false, frame_ != nullptr)) screenshot("");
-    if (ImGui::MenuItem("Snapshot", "K", false, frame_ != nullptr && !compare_)) takeSnapshot();
+    const bool image = frame_ != nullptr || (compFrame_ && !compFrame_->panes.empty());
+    if (ImGui::MenuItem(compare_ ? "Save screenshot (figure and every pane)" : "Save screenshot", "S / F12", false, image)) screenshot("");
+    if (ImGui::MenuItem(compare_ ? "Snapshot every pane" : "Snapshot", "K", false, image)) takeSnapshot();
     ImGui::Separator();
     if (ImGui::MenuItem("Quit", "Ctrl+Q")) requestQuit();
     ImGui::EndMenu();

@@ -11,6 +11,16 @@ namespace candela {
 
 namespace fs = std::filesystem;
 
+namespace {
+// A pane's label as part of a file name: "full*" (edited) becomes "full-edited".
+std::string paneFileLabel(std::string label) {
+  if (!label.empty() && label.back() == '*') label = label.substr(0, label.size() - 1) + "-edited";
+  for (char& c : label)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '-';
+  return label;
+}
+}  // namespace
+
 bool Viewer::writeFigure(const std::string& path) {
   if (!compFrame_ || compFrame_->panes.empty()) {
     report("figure: nothing to compare yet");
@@ -55,8 +65,11 @@ void Viewer::captureFigure() {
     DisplayImage image = readCanvas();
     Json panes = Json::array();
     for (const auto& p : compFrame_->panes) {
-      Json j{{"label", p.label}, {"seconds", p.seconds}, {"last_slice_seconds", p.lastSlice}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
-      if (!p.series.empty()) j["relmse"] = p.series.back().relmse, j["mse"] = p.series.back().mse, j["efficiency"] = p.efficiency();
+      Json j{{"label", p.label}, {"title", paneTitle(p)}, {"seconds", p.seconds}, {"last_slice_seconds", p.lastSlice}, {"spp", p.film ? p.film->spp() : 0}, {"strategy", toJson(p.strategy)}};
+      if (!p.series.empty())
+        j["relmse"] = p.series.back().relmse, j["mse"] = p.series.back().mse, j["efficiency"] = p.efficiency(),
+        j["error_estimated"] = p.series.back().estimated;
+      if (!p.autoSummary.empty()) j["auto_decision"] = p.autoSummary;
       if (p.agreementTested) j["agrees"] = p.agreement.agree;
       panes.push_back(j);
     }
@@ -66,6 +79,7 @@ void Viewer::captureFigure() {
     image.metadata["grid"] = std::to_string(canvas_.columns()) + "x" + std::to_string(canvas_.rows());
     image.metadata["settings"] = sceneToJson(edited_).dump();
     image.metadata["display"] = toJson(colors_.resolve(display_)).dump();
+    image.metadata["document"] = documentPath_;
     if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
     writeDisplayPng(path, image);
     const fs::path stem = fs::path(path).replace_extension("");
@@ -77,10 +91,23 @@ void Viewer::captureFigure() {
       exr.rgb = p.film->meanImage();
       exr.metadata = {{"scene", scenePath_}, {"strategy", toJson(p.strategy).dump()}, {"spp", std::to_string(p.film->spp())},
                       {"time_s", std::to_string(p.seconds)}};
-      writeExr(stem.string() + "-" + p.label + ".exr", exr);
+      const std::string paneStem = stem.string() + "-" + paneFileLabel(p.label);
+      writeExr(paneStem + ".exr", exr);
+      // The pane as displayed (through OCIO, at the film's resolution).
+      const size_t i = static_cast<size_t>(&p - compFrame_->panes.data());
+      if (i < paneGl_.size() && paneGl_[i]->outputWidth() > 0) {
+        DisplayImage png;
+        png.width = paneGl_[i]->outputWidth();
+        png.height = paneGl_[i]->outputHeight();
+        png.rgb8 = paneGl_[i]->readOutput();
+        png.metadata = exr.metadata;
+        png.metadata["pane"] = paneTitle(p);
+        png.metadata["display"] = toJson(colors_.resolve(display_)).dump();
+        writeDisplayPng(paneStem + ".png", png);
+      }
     }
     std::ofstream(stem.string() + ".csv") << comparisonCsv(*compFrame_);
-    report("figure: wrote " + path + ", one EXR per pane and " + stem.string() + ".csv");
+    report("figure: wrote " + path + ", a PNG and an EXR per pane and " + stem.string() + ".csv");
     figureDone_ = true;
   } catch (const std::exception& e) {
     report(std::string("figure failed: ") + e.what());
@@ -90,6 +117,8 @@ void Viewer::captureFigure() {
 }
 
 bool Viewer::screenshot(const std::string& requestedPath) {
+  // The comparison: the figure as the window shows it, with every pane's PNG and EXR beside it.
+  if (compare_) return writeFigure(requestedPath);
   if (!frame_ || !gl_->outputWidth()) {
     report("screenshot: no image yet");
     return false;

@@ -41,23 +41,34 @@ void Viewer::drawPaneLabels() {
     draw->AddText(ImVec2(r.x + 10, r.y + 10), IM_COL32(255, 220, 120, 255), compFrame_->status.c_str());
   const bool wipe = canvas_.wipe() && n == 2;
   if (wipe) canvas_.drawDivider(draw);
+  // The slowest pane's time: a pane ahead of it (auto, charged its decision) waits for the others.
+  double behind = 1e300;
+  for (const auto& p : compFrame_->panes) behind = std::min(behind, p.seconds);
   for (size_t i = 0; i < n; ++i) {
     const PaneState& p = compFrame_->panes[i];
     const ImageCanvas::Rect pane = canvas_.paneRect(static_cast<int>(i));
     const float x = wipe ? (i == 0 ? r.x : r.x + r.w * 0.5f) : pane.x, y = wipe ? r.y : pane.y;
-    char line[256];
-    std::snprintf(line, sizeof(line), "%s  %d spp  %.2f s", p.label.c_str(), p.film ? p.film->spp() : 0, p.seconds);
+    const std::string line = paneTitle(p) + (p.film ? "  " + std::to_string(p.film->spp()) + " spp" : "");
     const float paneWidth = wipe ? r.w * 0.5f : pane.w;
     std::string figures, agreement;
-    if (!p.series.empty()) {
+    if (p.preparing) {
+      figures = p.strategy.preset == "auto" ? "preparing: auto tries its candidates on a small image" : "preparing the scene";
+    } else if (!p.series.empty()) {
+      // Noise as an artist reads it: the RMS error relative to the pixel, sqrt(relMSE); estimated
+      // from the pane's own variance until a reference exists.
       char e[96];
-      std::snprintf(e, sizeof(e), "relMSE %.3g  eff %.3g  ", p.series.back().relmse, p.efficiency());
+      std::snprintf(e, sizeof(e), "noise %.1f%%%s  ", 100.0 * std::sqrt(std::max(0.0, p.series.back().relmse)),
+                    p.series.back().estimated ? " (est.)" : "");
+      figures = e;
+    } else if (!p.autoChoice.empty() && p.seconds > behind + 0.05) {
+      char e[96];
+      std::snprintf(e, sizeof(e), "deciding took %.2f s; the others catch up  ", p.seconds);
       figures = e;
     }
     ImU32 agreeColor = IM_COL32(170, 170, 170, 255);
-    if (!p.agreementTested && n > 1) agreement = "agreement from " + std::to_string(kAgreementMinSpp) + " spp";
+    if (!p.agreementTested && n > 1 && !p.preparing) agreement = "matches the others? checked at " + std::to_string(kAgreementMinSpp) + " spp";
     if (p.agreementTested) {
-      agreement = p.agreement.agree ? "agrees" : "DISAGREES";
+      agreement = p.agreement.agree ? "matches the others" : "DIFFERS from the others";
       agreeColor = p.agreement.agree ? IM_COL32(130, 220, 130, 255) : IM_COL32(255, 80, 70, 255);
     }
     // Narrow panes (four in a row) put the agreement on a line of its own rather than under
@@ -67,7 +78,7 @@ void Viewer::drawPaneLabels() {
     draw->PushClipRect(ImVec2(x, y), ImVec2(x + paneWidth, y + height), true);
     draw->AddRectFilled(ImVec2(x, y), ImVec2(x + paneWidth, y + height), IM_COL32(0, 0, 0, 150));
     if (wipe && i == 1) draw->AddText(ImVec2(x + paneWidth - 60, y + 3), paneColor(i), "(right)");
-    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, y + 3), paneColor(i), line);
+    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize() * 1.2f, ImVec2(x + 8, y + 3), paneColor(i), line.c_str());
     if (oneLine) {
       draw->AddText(ImVec2(x + 8, y + 22), agreeColor, (figures + agreement).c_str());
     } else {
@@ -88,7 +99,9 @@ void Viewer::drawPaneLabels() {
       draw->AddRectFilled(ImVec2(cell.x, cell.y), ImVec2(cell.x + cell.w, cell.y + cell.h), IM_COL32(25, 25, 28, 255));
       draw->AddLine(ImVec2(cell.x, cell.y), ImVec2(cell.x, cell.y + cell.h), IM_COL32(20, 20, 20, 255), 2.0f);
       draw->AddLine(ImVec2(cell.x, cell.y), ImVec2(cell.x + cell.w, cell.y), IM_COL32(20, 20, 20, 255), 2.0f);
-      draw->AddText(ImVec2(cell.x + 8.0f, cell.y + 6.0f), IM_COL32(200, 200, 200, 255), "relMSE against time (log-log)");
+      const bool estimated = !compFrame_->hasReference;
+      draw->AddText(ImVec2(cell.x + 8.0f, cell.y + 6.0f), IM_COL32(200, 200, 200, 255),
+                    estimated ? "error against time (log-log), each pane's own estimate" : "error against the reference, against time (log-log)");
       drawErrorChart(draw, *compFrame_, origin, size);
     }
   }
@@ -438,6 +451,25 @@ GLuint uploadThumbnail(const Snapshot& s) {
 }  // namespace
 
 void Viewer::takeSnapshot() {
+  if (compare_) {
+    // The comparison: one snapshot per pane that has an image, labelled with its strategy.
+    int kept = 0;
+    for (const PaneState& p : compFrame_ ? compFrame_->panes : std::vector<PaneState>{}) {
+      if (!p.film || p.film->spp() == 0) continue;
+      try {
+        nlohmann::json look = lookState();
+        look["strategy"] = toJson(p.strategy);
+        const Snapshot& s = snapshots_.add(p.film->image(), look, p.film->spp(), paneTitle(p));
+        thumbnails_[s.id] = uploadThumbnail(s);
+        ++kept;
+      } catch (const std::exception& e) {
+        report(std::string("snapshot failed: ") + e.what());
+      }
+    }
+    if (kept == 0) report("snapshot: no pane has an image yet");
+    else showSnapshots_ = true, report("snapshot: kept " + std::to_string(kept) + " panes");
+    return;
+  }
   if (!frame_ || frame_->preview || frame_->film.spp() == 0) {
     report("snapshot: no image yet");
     return;
