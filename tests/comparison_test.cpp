@@ -66,8 +66,48 @@ TEST(Comparison, UnbiasedStrategiesAgree) {
   for (const auto& p : frame->panes) {
     EXPECT_TRUE(p.agreementTested) << p.label;
     EXPECT_TRUE(p.agreement.agree) << p.label << ": " << p.agreement.worst;
-    EXPECT_TRUE(p.series.empty()) << "no reference, no error series";
+    ASSERT_FALSE(p.series.empty()) << "no reference: the pane's own error estimate";
+    for (const auto& e : p.series) EXPECT_TRUE(e.estimated) << p.label;
   }
+}
+
+// Without a reference a pane's error is its own estimate, sample variance / spp: for an unbiased
+// render that is its expected MSE, so it matches the error measured against a reference of many
+// more samples (whose own error adds about spp / 4096 of the estimate).
+TEST(Comparison, TheOwnErrorEstimateMatchesTheMeasuredError) {
+  const SceneDesc desc = test::loadScene("assets/scenes/test/slab.json", {"camera.resolution=[32,32]"});
+  SceneDesc refDesc = desc;
+  refDesc.render.seed = 99;
+  const std::vector<float> reference = test::render(refDesc, 4096).meanImage();
+  ComparisonSession session;
+  session.start(desc, {{"emission", strategyPreset("emission")}}, {}, 0, {}, 0.5);
+  auto frame = waitUntilDone(session, 0.5);
+  ASSERT_TRUE(frame);
+  const PaneState& p = frame->panes[0];
+  ASSERT_TRUE(p.film && !p.series.empty());
+  const ErrorMetrics measured = imageError(p.film->meanImage(), reference);
+  const ErrorSample& estimate = p.series.back();
+  ASSERT_EQ(estimate.spp, p.film->spp());
+  // The measured error holds the reference's own too: spp / 4096 of the pane's, both unbiased.
+  const double withReference = 1.0 + estimate.spp / 4096.0;
+  EXPECT_NEAR(estimate.mse * withReference / measured.mse, 1.0, 0.25) << "at " << estimate.spp << " spp";
+  EXPECT_NEAR(estimate.relmse * withReference / measured.relmse, 1.0, 0.25) << "at " << estimate.spp << " spp";
+}
+
+// Titles in words; auto's names what it chose.
+TEST(Comparison, PaneTitlesInWords) {
+  PaneState p;
+  p.label = "full";
+  p.strategy = strategyPreset("full");
+  EXPECT_EQ(paneTitle(p), "emission + scattering sampling");
+  p.label = "full*";
+  EXPECT_EQ(paneTitle(p), "emission + scattering sampling (edited)");
+  p.label = "auto";
+  p.strategy = strategyPreset("auto");
+  EXPECT_EQ(paneTitle(p), "auto: choosing");
+  p.preparing = false;
+  p.autoChoice = "conventional, gathering";
+  EXPECT_EQ(paneTitle(p), "auto: chose tracking only (gathering)");
 }
 
 // A biased pane is the odd one out: two independent renders of the slab agree with each other, and a
