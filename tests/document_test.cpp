@@ -1,5 +1,7 @@
 // The viewer's document machinery, headless: undo/redo grouping, snapshots on disk, frame patterns.
 #include "edit_history.h"
+#include "field_labels.h"
+#include "message_severity.h"
 #include "procedural.h"
 #include "sequence.h"
 #include "snapshot_store.h"
@@ -67,6 +69,26 @@ TEST(EditHistory, AutoExposureHoldsUnderEarlierEdits) {
   EXPECT_EQ(*h.undo(), Json({{"display", {{"exposure", -3.5}}}, {"seed", 1}}));
   EXPECT_EQ(*h.redo(), Json({{"display", {{"exposure", -3.5}}}, {"seed", 7}}));
   EXPECT_EQ(*h.redo(), Json({{"display", {{"exposure", 2.0}}}, {"seed", 7}}));
+}
+
+// The panels name fields in words; the key stays for the tooltip, scene files and --set.
+TEST(Panels, FieldsAreLabelledInWords) {
+  EXPECT_EQ(fieldLabel("sigma_t_scale"), "Density");
+  EXPECT_EQ(fieldLabel("g"), "Anisotropy (forward > 0)");
+  EXPECT_EQ(fieldLabel("guided_probability"), "Guided probability");
+  EXPECT_EQ(fieldLabel("probe_time_cap_s"), "Probe time cap (seconds)");
+  EXPECT_EQ(fieldLabel("cone_angle_deg"), "Cone angle (degrees)");
+}
+
+// Messages are coloured by what they are: information is not shown as an error.
+TEST(Panels, MessagesHaveASeverity) {
+  EXPECT_EQ(messageSeverity("auto exposure: +5.40 stops (E / Shift+E to change)"), Severity::Info);
+  EXPECT_EQ(messageSeverity("saved out.json"), Severity::Info);
+  EXPECT_EQ(messageSeverity("screenshot: wrote a.png and a.exr"), Severity::Info);
+  EXPECT_EQ(messageSeverity("warning: volumes.0: emission.intensity is 0: the volume emits nothing"), Severity::Warning);
+  EXPECT_EQ(messageSeverity("edit rejected: a.json: volumes.0.g: expected a value from -0.999 to 0.999"), Severity::Error);
+  EXPECT_EQ(messageSeverity("could not open x.vdb: no such file (still showing the last good scene)"), Severity::Error);
+  EXPECT_EQ(messageSeverity("save failed: cannot write"), Severity::Error);
 }
 
 // A scene file without display.exposure asks for auto exposure; one with it keeps it, and the

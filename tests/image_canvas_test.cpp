@@ -39,5 +39,24 @@ TEST(ImageCanvas, PanesTakeTheGridThatShowsEachLargest) {
   EXPECT_EQ(canvas.paneAt(ImVec2(900.0f, 300.0f)), 0);
 }
 
+// 1:1 (key 1): one image pixel per screen pixel. An image smaller than the fitted pane is drawn at
+// its own size, centred; a larger one is zoomed so that its pixels are the screen's. 0 fits again.
+TEST(ImageCanvas, ActualPixels) {
+  ImageCanvas canvas(nullptr);  // no window: one framebuffer pixel per window unit
+  const ImageCanvas::Rect area{0.0f, 20.0f, 1070.0f, 700.0f};
+  canvas.setOneToOne(true);
+  canvas.layout(area, 16.0f / 9.0f, 1, 320);
+  EXPECT_FLOAT_EQ(canvas.rect().w, 320.0f);
+  EXPECT_FLOAT_EQ(canvas.rect().h, 180.0f);
+  EXPECT_FLOAT_EQ(canvas.rect().x + 160.0f, 535.0f);
+  canvas.layout(area, 16.0f / 9.0f, 1, 2140);  // twice the fitted width
+  EXPECT_FLOAT_EQ(canvas.rect().w, 1070.0f);
+  EXPECT_NEAR(canvas.view().u1 - canvas.view().u0, 0.5f, 1e-6f);
+  canvas.resetZoom();
+  EXPECT_FALSE(canvas.oneToOne());
+  canvas.layout(area, 16.0f / 9.0f, 1, 320);
+  EXPECT_FLOAT_EQ(canvas.rect().w, 1070.0f);
+}
+
 }  // namespace
 }  // namespace candela

@@ -52,6 +52,29 @@ TEST(RenderSession, StopsExactlyAtTheSppLimitAndMatchesABatchRender) {
   EXPECT_LT(worst, 1e-4);
 }
 
+// Paused: no sample is added (the frame shown keeps its spp however long it waits); resumed, the
+// render goes on to its limit and matches the batch render of the same samples.
+TEST(RenderSession, PauseHoldsTheSamplesAndResumeGoesOn) {
+  const SceneDesc desc = smallScene("assets/scenes/test/slab.json");
+  RenderSession session;
+  session.setLimits(ProgressLimits{4096, 0.0f});
+  session.open(desc);
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return !f.preview && f.film.spp() >= 8; }));
+  session.setPaused(true);
+  // The pass in flight may still land; after that nothing changes.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto held = session.latest();
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_EQ(session.latest()->version, held->version);
+  EXPECT_EQ(session.latest()->film.spp(), held->film.spp());
+  session.setLimits(ProgressLimits{held->film.spp() + 16, 0.0f});
+  session.setPaused(false);
+  auto done = waitFor(session, [](const Frame& f) { return f.finished; });
+  ASSERT_TRUE(done);
+  EXPECT_EQ(done->film.spp(), held->film.spp() + 16);
+  EXPECT_EQ(done->film.meanImage(), test::render(desc, done->film.spp()).meanImage());
+}
+
 TEST(RenderSession, EditRestartsWithAPreviewThenRefines) {
   // Every published frame, in order (the notification runs on the worker right after publishing).
   // Declared before the session: its worker may still notify until the session is destroyed.

@@ -1,5 +1,7 @@
 #include "comparison_session.h"
 
+#include "thread_priority.h"
+
 #include <algorithm>
 #include <chrono>
 #include <sstream>
@@ -7,7 +9,10 @@
 namespace candela {
 
 ComparisonSession::ComparisonSession(RenderOptions options) : options_(options) {
-  worker_ = std::thread([this] { workerLoop(); });
+  worker_ = std::thread([this] {
+    lowerThisThreadsPriority();  // the UI thread comes first (thread_priority.h)
+    workerLoop();
+  });
 }
 
 ComparisonSession::~ComparisonSession() {

@@ -1,5 +1,7 @@
 #include "guide_inspector_view.h"
 
+#include "thread_priority.h"
+
 #include <imgui.h>
 
 #include <algorithm>
@@ -38,6 +40,7 @@ void GuideInspectorView::start() {
   const int x = x_, y = y_;
   const int seed = secondarySeed_;
   worker_ = std::thread([this, desc, x, y, seed] {
+    lowerThisThreadsPriority();
     std::shared_ptr<const GuideInspection> r;
     std::string error;
     try {

@@ -5,7 +5,7 @@
 
 namespace candela {
 
-void ImageCanvas::layout(const Rect& area, float aspect, int panes) {
+void ImageCanvas::layout(const Rect& area, float aspect, int panes, int imageWidth) {
   rect_ = area;
   paneCount_ = std::max(1, panes);
   columns_ = rows_ = 1;
@@ -27,6 +27,28 @@ void ImageCanvas::layout(const Rect& area, float aspect, int panes) {
     rect_.h = area.w / aspect;
     rect_.y = area.y + 0.5f * (area.h - rect_.h);
   }
+  if (!oneToOne_ || imageWidth <= 0) return;
+  // One image pixel per framebuffer pixel: the pane's width in window units that holds imageWidth.
+  float scale = 1.0f;
+  if (window_) {
+    int fbw = 0, fbh = 0, ww = 0, wh = 0;
+    glfwGetFramebufferSize(window_, &fbw, &fbh);
+    glfwGetWindowSize(window_, &ww, &wh);
+    scale = static_cast<float>(fbw) / static_cast<float>(std::max(1, ww));
+  }
+  const float wanted = static_cast<float>(imageWidth) / std::max(1e-3f, scale);
+  const float fitted = rect_.w / static_cast<float>(wipe_ ? 1 : columns_);
+  if (wanted <= fitted) {
+    const float shrink = wanted / fitted;
+    const Rect whole = rect_;
+    rect_.w *= shrink, rect_.h *= shrink;
+    rect_.x = whole.x + 0.5f * (whole.w - rect_.w);
+    rect_.y = whole.y + 0.5f * (whole.h - rect_.h);
+    zoom_ = 1.0f;
+  } else {
+    zoom_ = wanted / fitted;
+  }
+  updateView();
 }
 
 ImageCanvas::Rect ImageCanvas::paneRect(int i) const {
@@ -64,6 +86,7 @@ void ImageCanvas::updateView() {
 }
 
 void ImageCanvas::resetZoom() {
+  oneToOne_ = false;
   zoom_ = 1.0f;
   viewCenter_ = ImVec2(0.5f, 0.5f);
   updateView();
@@ -78,6 +101,7 @@ bool ImageCanvas::handleMouse() {
   if (over && io.KeyCtrl && io.MouseWheel != 0.0f) {
     const Rect pane = paneRect(paneAt(io.MousePos));
     const ImVec2 before = imageUv(pane, io.MousePos);
+    oneToOne_ = false;
     zoom_ *= std::exp(io.MouseWheel * 0.2f);
     updateView();
     const ImVec2 after = imageUv(pane, io.MousePos);

@@ -31,7 +31,9 @@ class ImageCanvas {
   // grid of columns and rows that shows each largest (four 16:9 panes in a wide area: 2 x 2, not a
   // row of four a quarter the size). In wipe mode the panes share one frame. Call once a frame
   // before anything else.
-  void layout(const Rect& area, float aspect, int panes = 1);
+  // With 1:1 on (setOneToOne) and `imageWidth` known, one image pixel covers one framebuffer pixel:
+  // a smaller image is drawn smaller, centred; a larger one is zoomed about the view's centre.
+  void layout(const Rect& area, float aspect, int panes = 1, int imageWidth = 0);
   const Rect& rect() const { return rect_; }  // every pane together
   int columns() const { return columns_; }
   int rows() const { return rows_; }
@@ -49,7 +51,9 @@ class ImageCanvas {
   // Ctrl+wheel zoom about the cursor, Shift+drag pan, and (in wipe mode) dragging the divider.
   // Returns true when it used the mouse this frame (the camera must not move then).
   bool handleMouse();
-  void resetZoom();
+  void resetZoom();  // fit (also ends 1:1)
+  void setOneToOne(bool on) { oneToOne_ = on; }
+  bool oneToOne() const { return oneToOne_; }
 
   // Wipe: two images in one frame, split at a divider the user drags.
   bool wipe() const { return wipe_; }
@@ -80,6 +84,7 @@ class ImageCanvas {
   int paneCount_ = 1, columns_ = 1, rows_ = 1;
   ViewWindow view_;
   float zoom_ = 1.0f;
+  bool oneToOne_ = false;
   ImVec2 viewCenter_{0.5f, 0.5f};
   bool wipe_ = false;
   float wipePosition_ = 0.5f;

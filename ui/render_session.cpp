@@ -1,5 +1,7 @@
 #include "render_session.h"
 
+#include "thread_priority.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -21,8 +23,15 @@ SceneDiff diffScenes(const SceneDesc& a, const SceneDesc& b) {
 }
 
 RenderSession::RenderSession(RenderOptions options) : options_(options) {
-  worker_ = std::thread([this] { workerLoop(); });
-  loader_ = std::thread([this] { loaderLoop(); });
+  // Both yield to the UI thread, and so do the TBB workers they start (thread_priority.h).
+  worker_ = std::thread([this] {
+    lowerThisThreadsPriority();
+    workerLoop();
+  });
+  loader_ = std::thread([this] {
+    lowerThisThreadsPriority();
+    loaderLoop();
+  });
 }
 
 RenderSession::~RenderSession() {
@@ -99,6 +108,15 @@ std::optional<RenderSession::ShownDesc> RenderSession::takeShownDesc() {
 void RenderSession::message(const std::string& text) {
   std::lock_guard<std::mutex> lock(mutex_);
   messages_.push_back(text);
+}
+
+void RenderSession::setPaused(bool paused) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    paused_ = paused;
+  }
+  if (paused) cancelPass_ = true;
+  workerWake_.notify_one();
 }
 
 void RenderSession::publish(std::shared_ptr<Frame> frame) {
@@ -239,7 +257,7 @@ void RenderSession::workerLoop() {
       };
       workerWake_.wait(lock, [&] {
         return stop_ || builtScene_ || limitsChanged_ || (target_ && target_->request > seenTarget) ||
-               (scene && !finished() && !loading_);
+               (scene && !finished() && !loading_ && !paused_);
       });
       if (stop_) return;
       cancelPass_ = false;
@@ -287,6 +305,7 @@ void RenderSession::workerLoop() {
       shownProbes_ = scene->probes();
     }
 
+    if (paused_) continue;  // the edits are applied; their image comes on resume
     const bool done = (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
     if (done) {
       if (!finishedPublished) {

@@ -60,6 +60,10 @@ class RenderSession {
   // render settings differ, else rebuilt on the loader thread. Returns the request id.
   uint64_t edit(const SceneDesc& desc);
   void setLimits(const ProgressLimits& limits);
+  // Paused: the pass in flight stops and no other starts; the samples so far stay shown. Edits still
+  // apply (rebuilds included), and their images come on resume.
+  void setPaused(bool paused);
+  bool paused() const { return paused_.load(); }
   // Called on the worker or loader thread whenever a frame or message is published (the viewer wakes
   // its event loop with it). Set before the first request.
   void setNotify(std::function<void()> notify) { notify_ = std::move(notify); }
@@ -113,6 +117,7 @@ class RenderSession {
   ProgressLimits limits_;
   bool limitsChanged_ = false;
   std::atomic<bool> cancelPass_{false};
+  std::atomic<bool> paused_{false};
 
   // Loader state.
   std::optional<Target> buildRequest_;

@@ -51,7 +51,6 @@ void ScriptedDriver::measureLatency(Viewer& v) {
     measureNext_ = Clock::now();
     measureFrames_ = 0;
   }
-  ++measureFrames_;
   if (Clock::now() < measureNext_ || v.latencyRequest_ != 0) return;
   if (measureIndex_ == v.options_.measureEdits) {
     ++measureIndex_;
@@ -107,6 +106,8 @@ void ScriptedDriver::applyEdits(Viewer& v) {
 
 void ScriptedDriver::step(Viewer& v) {
   const ViewerOptions& o = v.options_;
+  // The UI frame rate counts every frame drawn while the edits are measured, previews included.
+  if (measureIndex_ > 0 && measuring(v)) ++measureFrames_;
   if (v.compare_) {
     // Scripted comparison: the figure once every pane has had --equal-time seconds.
     const auto& frame = v.compFrame_;

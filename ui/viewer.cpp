@@ -320,6 +320,13 @@ void Viewer::beginLatency(uint64_t request) {
   }
 }
 
+void Viewer::togglePause() {
+  if (compare_) return;  // equal time: the panes run together or not at all
+  paused_ = !paused_;
+  session_.setPaused(paused_);
+  report(paused_ ? "paused (P resumes)" : "resumed");
+}
+
 void Viewer::report(const std::string& text) {
   std::cerr << "candela: " << text << "\n";
   messages_.push_back({text, ViewerClock::now()});
@@ -476,6 +483,11 @@ void Viewer::pollDrops() {
   const std::string path = droppedPaths_.front();
   droppedPaths_.clear();  // several files: the first opens
   confirmDiscard("open " + fs::path(path).filename().string(), [this, path] { openScene(path); });
+}
+
+int Viewer::imageWidth() const {
+  if (compare_ && compFrame_) return compFrame_->width;
+  return frame_ ? frame_->width : 0;
 }
 
 float Viewer::imageAspect() const {
@@ -688,7 +700,7 @@ int Viewer::run() {
       int ww, wh;
       glfwGetWindowSize(window_, &ww, &wh);
       canvas_.layout({0.0f, menuHeight_, std::max(1.0f, ww - panelWidth_), std::max(1.0f, wh - menuHeight_ - statusHeight_ - timelineHeight_)},
-                     imageAspect(), compare_ ? paneCount() : (comparedSnapshot_ && frame_ ? 2 : 1));
+                     imageAspect(), compare_ ? paneCount() : (comparedSnapshot_ && frame_ ? 2 : 1), imageWidth());
       drawPanel();
       inspector_.draw();
       drawDialogs();

@@ -154,6 +154,7 @@ class Viewer {
   std::optional<std::string> canvasCaptureRequest_;
 
   float imageAspect() const;
+  int imageWidth() const;  // of the image shown (one pane's), 0 before the first
 
   GLFWwindow* window_;
   ViewerOptions options_;
@@ -279,6 +280,8 @@ class Viewer {
   bool quitNow_ = false;
   int busyFrames_ = 3;
   int exitCode_ = 0;
+  bool paused_ = false;  // P: the render holds its samples until resumed
+  void togglePause();
 };
 
 }  // namespace candela

@@ -34,6 +34,9 @@ void Viewer::drawMenuBar() {
     if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
     if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) resetCamera();
     if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked())) toggleReadoutLock();
+    if (ImGui::MenuItem("Fit image", "0", !canvas_.oneToOne())) canvas_.resetZoom();
+    if (ImGui::MenuItem("Actual pixels (1:1)", "1", canvas_.oneToOne())) canvas_.setOneToOne(true);
+    if (ImGui::MenuItem(paused_ ? "Resume rendering" : "Pause rendering", "P", paused_, !compare_)) togglePause();
     if (ImGui::MenuItem("Snapshots", "Shift+K", showSnapshots_)) showSnapshots_ = !showSnapshots_;
     ImGui::Separator();
     for (const auto& [value, name] : EnumNames<ChannelView>::get())
@@ -70,9 +73,9 @@ void Viewer::drawMenuBar() {
     ImGui::MenuItem("Messages", nullptr, &showMessages_);
     ImGui::TextDisabled("Open: File > Open, Ctrl+O, or drop a scene (.json) or volume (.vdb) on the window");
     ImGui::TextDisabled("Mouse on the image: left tumble, middle track, right dolly, wheel dolly (Alt optional)");
-    ImGui::TextDisabled("Image: Ctrl+wheel zoom, Shift+left drag pan, 0 fit (all panes together)");
+    ImGui::TextDisabled("Image: Ctrl+wheel zoom, Shift+left drag pan, 0 fit, 1 actual pixels (all panes together)");
     ImGui::TextDisabled("Ctrl+click a pixel: guide inspector (distance densities along its ray)");
-    ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot");
+    ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot, P pause");
     ImGui::TextDisabled("Ctrl+Z undo, Ctrl+Shift+Z redo, Ctrl+S save, K snapshot, Shift+K snapshots, Left/Right frame, Space play");
     ImGui::EndMenu();
   }
@@ -263,6 +266,8 @@ void Viewer::handleKeys() {
         if (!frames_.empty()) playing_ = !playing_;
         break;
       case GLFW_KEY_0: canvas_.resetZoom(); break;
+      case GLFW_KEY_1: canvas_.setOneToOne(true); break;
+      case GLFW_KEY_P: togglePause(); break;
       default: break;
     }
   }

@@ -4,6 +4,7 @@
 
 #include "auto_strategy.h"
 #include "error_chart.h"
+#include "message_severity.h"
 #include "param_editor.h"
 
 #include <algorithm>
@@ -255,13 +256,6 @@ void Viewer::drawPanel() {
     }
   }
   drawSnapshots();
-  if (!compare_ && ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) {
-    ParamEditor editor;
-    limits_.visit(editor);
-    if (editor.changed) session_.setLimits(limits_);
-    if (ImGui::Button("Restart")) beginLatency(session_.edit(edited_));
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Discard the accumulated samples and start again");
-  }
   if (!haveScene_) {
     ImGui::TextWrapped(session_.loading() ? "Loading..." : "No scene. File > Open.");
     ImGui::End();
@@ -269,51 +263,15 @@ void Viewer::drawPanel() {
   }
   bool changed = false;
   if (compare_) drawComparisonPanel();
-  if (!compare_ && ImGui::CollapsingHeader("Strategy", ImGuiTreeNodeFlags_DefaultOpen)) {
-    ParamEditor editor;
-    editor.choices["preset"] = strategyPresetNames();
-    // Under auto as chosen, the fields show what auto decided (the running scene's strategy, not the
-    // document's undecided one), and an edit to any of them takes that choice over as its preset.
-    const StrategySettings* autoChoice = autoChoiceShown();
-    if (autoChoice) {
-      // What auto decided, and why: the fields below are its choice.
-      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.6f, 0.85f, 1.0f, 1.0f));
-      ImGui::TextWrapped("%s", frame_->autoDecision.c_str());
-      ImGui::PopStyleColor();
-      ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
-      ImGui::TextWrapped("Editing a field below takes auto's choice over as the %s preset.",
-                         takeOverAutoChoice(*autoChoice, frame_->autoChoice).preset.c_str());
-      ImGui::PopStyleColor();
-    }
-    if (frame_ && !frame_->adaptiveSplit.empty()) {
-      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.6f, 0.85f, 1.0f, 1.0f));
-      ImGui::TextWrapped("%s", frame_->adaptiveSplit.c_str());
-      ImGui::PopStyleColor();
-    }
-    StrategySettings shown = autoChoice ? *autoChoice : edited_.strategy;
-    shown.visit(editor);
-    if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
-    else if (editor.changed) edited_.strategy = autoChoice ? takeOverAutoChoice(shown, frame_->autoChoice) : shown;
-    changed |= editor.changed;
-  }
-  if (ImGui::CollapsingHeader("Render")) {
-    ParamEditor editor;
-    edited_.render.visit(editor);
-    changed |= editor.changed;
-  }
-  if (ImGui::CollapsingHeader("Camera")) {
-    ParamEditor editor;
-    edited_.camera.visit(editor);
-    changed |= editor.changed;
-  }
   // One tree node per item, with its fields, what the item warns about and a Remove button.
-  auto list = [&](const char* title, auto& items, auto label, auto warnings) {
+  auto list = [&](const char* title, auto& items, auto label, auto warnings, auto configure) {
     if (!ImGui::CollapsingHeader(title, ImGuiTreeNodeFlags_DefaultOpen)) return false;
     int remove = -1;
     for (size_t i = 0; i < items.size(); ++i) {
       ImGui::PushID(static_cast<int>(i));
       if (ImGui::TreeNodeEx(label(items[i], i).c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
         ParamEditor editor;
+        configure(editor, items[i]);
         items[i].visit(editor);
         changed |= editor.changed;
         for (const std::string& w : warnings(items[i])) {
@@ -330,9 +288,14 @@ void Viewer::drawPanel() {
     return true;
   };
   auto none = [](const auto&) { return std::vector<std::string>{}; };
+  auto plain = [](ParamEditor&, const auto&) {};
+  // A sun is set by where it stands in the sky, a spot by where it aims.
+  auto angles = [](ParamEditor& e, const LightDesc& l) {
+    e.directionSense = l.type == LightType::Directional ? -1 : l.type == LightType::Spot ? 1 : 0;
+  };
   list("Volumes", edited_.volumes, [](const VolumeDesc& v, size_t i) { return v.name.empty() ? "volume " + std::to_string(i) : v.name; },
-       [](const VolumeDesc& v) { return emissionWarnings(v); });
-  if (list("Lights", edited_.lights, [](const LightDesc& l, size_t i) { return std::to_string(i) + ": " + enumName(l.type); }, none)) {
+       [](const VolumeDesc& v) { return emissionWarnings(v); }, plain);
+  if (list("Lights", edited_.lights, [](const LightDesc& l, size_t i) { return std::to_string(i) + ": " + enumName(l.type); }, none, angles)) {
     // The default rig's parts (and a point light) back after a Remove.
     if (ImGui::SmallButton("Add sun")) edited_.lights.push_back(defaultSun()), changed = true;
     ImGui::SameLine();
@@ -344,7 +307,56 @@ void Viewer::drawPanel() {
       edited_.lights.push_back(point), changed = true;
     }
   }
-  list("Surfaces", edited_.surfaces, [](const SurfaceDesc& s, size_t i) { return std::to_string(i) + ": " + enumName(s.type); }, none);
+  list("Surfaces", edited_.surfaces, [](const SurfaceDesc& s, size_t i) { return std::to_string(i) + ": " + enumName(s.type); }, none, plain);
+  if (ImGui::CollapsingHeader("Camera")) {
+    ParamEditor editor;
+    edited_.camera.visit(editor);
+    changed |= editor.changed;
+  }
+  if (!compare_ && ImGui::CollapsingHeader("Render", ImGuiTreeNodeFlags_DefaultOpen)) {
+    // The viewer refines until a limit the artist sets (0: until stopped), or while not paused.
+    ImGui::TextDisabled("Refine until (0: no limit)");
+    ParamEditor editor;
+    limits_.visit(editor);
+    if (editor.changed) session_.setLimits(limits_);
+    if (ImGui::Button(paused_ ? "Resume (P)" : "Pause (P)")) togglePause();
+    ImGui::SameLine();
+    if (ImGui::Button("Restart")) beginLatency(session_.edit(edited_));
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Discard the accumulated samples and start again");
+  }
+  if (ImGui::CollapsingHeader("Render settings")) {
+    ParamEditor editor;
+    edited_.render.visit(editor);
+    changed |= editor.changed;
+  }
+  if (!compare_ && ImGui::CollapsingHeader("Strategy (for rendering engineers)")) {
+    ParamEditor editor;
+    editor.choices["preset"] = strategyPresetNames();
+    // Under auto as chosen, the fields show what auto decided (the running scene's strategy, not the
+    // document's undecided one), and an edit to any of them takes that choice over as its preset.
+    const StrategySettings* autoChoice = autoChoiceShown();
+    if (autoChoice) {
+      // What auto decided in one line; why, and the split's figures, on demand.
+      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.6f, 0.85f, 1.0f, 1.0f));
+      ImGui::TextWrapped("auto chose %s", strategyInWords(frame_->autoChoice).c_str());
+      ImGui::PopStyleColor();
+      if (ImGui::TreeNode("Why (details)")) {
+        ImGui::TextWrapped("%s", frame_->autoDecision.c_str());
+        if (!frame_->adaptiveSplit.empty()) ImGui::TextWrapped("%s", frame_->adaptiveSplit.c_str());
+        ImGui::TextDisabled("Editing a field below takes auto's choice over as the %s preset.",
+                           takeOverAutoChoice(*autoChoice, frame_->autoChoice).preset.c_str());
+        ImGui::TreePop();
+      }
+    } else if (frame_ && !frame_->adaptiveSplit.empty() && ImGui::TreeNode("Adaptive sampling (details)")) {
+      ImGui::TextWrapped("%s", frame_->adaptiveSplit.c_str());
+      ImGui::TreePop();
+    }
+    StrategySettings shown = autoChoice ? *autoChoice : edited_.strategy;
+    shown.visit(editor);
+    if (!editor.presetChosen.empty()) edited_.strategy = strategyPreset(editor.presetChosen);
+    else if (editor.changed) edited_.strategy = autoChoice ? takeOverAutoChoice(shown, frame_->autoChoice) : shown;
+    changed |= editor.changed;
+  }
   ImGui::PopItemWidth();
   ImGui::End();
   if (changed) submitEdit("panel");
@@ -371,7 +383,7 @@ void Viewer::drawStatusBar() {
     ImGui::Text("%s%s | %s | %dx%d | %d spp%s%s | %.1f s | %.3g samples/s | rejected %llu | edit->image %s | UI %.0f fps%s",
                 dirty_ ? "* " : "", (documentPath_.empty() ? scenePath_ : documentPath_).c_str(),
                 frame_->scene ? (frame_->autoChoice.empty() ? frame_->scene->strategy.preset : "auto: " + frame_->autoChoice).c_str() : "", frame_->width, frame_->height,
-                frame_->preview ? 0 : film.spp(), split, frame_->preview ? " (preview)" : (frame_->finished ? " (done)" : ""), frame_->seconds,
+                frame_->preview ? 0 : film.spp(), split, frame_->preview ? " (preview)" : (paused_ ? " (paused)" : frame_->finished ? " (done)" : ""), frame_->seconds,
                 frame_->samplesPerSecond, static_cast<unsigned long long>(film.rejectedSamples()), latency, fps,
                 session_.loading() ? " | loading..." : "");
     if (const std::string w = film.rejectedSamplesWarning(); !w.empty()) {
@@ -419,15 +431,29 @@ void Viewer::drawStatusBar() {
   } else {
     ImGui::TextDisabled("pixel readout: hover the image (L locks)");
   }
-  // The newest message stays visible for 10 seconds; Help > Messages keeps them all.
-  if (!messages_.empty() && secondsSince(messages_.back().second) < 10.0)
-    ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.35f, 1.0f), "%s", messages_.back().first.c_str());
+  // The newest message stays visible for 10 seconds (an error for 20); Help > Messages keeps them all.
+  // Coloured by severity: information plain, warnings amber, errors red.
+  auto colour = [](const std::string& text) {
+    switch (messageSeverity(text)) {
+      case Severity::Error: return ImVec4(1.0f, 0.42f, 0.35f, 1.0f);
+      case Severity::Warning: return ImVec4(1.0f, 0.75f, 0.3f, 1.0f);
+      default: return ImGui::GetStyleColorVec4(ImGuiCol_Text);
+    }
+  };
+  if (!messages_.empty()) {
+    const auto& [text, when] = messages_.back();
+    if (secondsSince(when) < (messageSeverity(text) == Severity::Error ? 20.0 : 10.0)) ImGui::TextColored(colour(text), "%s", text.c_str());
+  }
   ImGui::End();
 
   if (showMessages_) {
     ImGui::SetNextWindowSize(ImVec2(700, 300), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("Messages", &showMessages_))
-      for (const auto& m : messages_) ImGui::TextWrapped("%s", m.first.c_str());
+      for (const auto& m : messages_) {
+        ImGui::PushStyleColor(ImGuiCol_Text, colour(m.first));
+        ImGui::TextWrapped("%s", m.first.c_str());
+        ImGui::PopStyleColor();
+      }
     ImGui::End();
   }
 }
