@@ -574,6 +574,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   r->add_option("--up", upAxis, "For a .vdb: its up axis, auto (Z when Blender wrote it), y or z")->check(CLI::IsMember({"auto", "y", "z"}));
   r->add_flag("!--no-light-rig", importOptions.light_rig, "For a .vdb: no default sun and sky");
+  r->add_flag("!--no-ground", importOptions.ground, "For a .vdb: no ground plane under the volume");
   r->add_option("--frames", framesText, "Render frames A-B of a sequence (volume files with fire.####.vdb patterns); OUT gets .#### unless it has a pattern");
   r->add_option("-o,--output", out, "Output image (.exr or .png)")->required();
   auto* sppOpt = r->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
@@ -612,7 +613,9 @@ int main(int argc, char** argv) {
   g->add_option("--seed", gen.seed, "Noise seed");
   g->add_option("--resolution", gen.resolution, "Voxels along the longest axis")->check(CLI::Range(2, 1024));
   g->add_option("--size", size, "World extent X,Y,Z")->delimiter(',')->expected(3);
-  g->add_option("--value", gen.value, "constant/ramp density");
+  auto* generateValue = g->add_option("--value", gen.value,
+                                      "Density: constant/ramp's; for torch, mist, cloud and plume their peak (default: what the shipped "
+                                      "scenes give the shape, cloud 12, torch 6, plume 1.5, mist 0.1)");
   g->add_option("--temperature", gen.temperature, "constant/ramp temperature");
 
   bool quick = false;
@@ -656,6 +659,7 @@ int main(int argc, char** argv) {
     if (ins->parsed()) return inspect(scenePath, pixel, secondarySeed, lightSamples, preset, sets, out);
     if (g->parsed()) {
       gen.type = genType;
+      if (generateValue->count() == 0) gen.value = standaloneDensity(genType);
       if (size.size() == 3) gen.size = Vec3(size[0], size[1], size[2]);
       VolumeDesc check;
       check.has_generator = true;

@@ -60,6 +60,9 @@ int main(int argc, char** argv) {
   app.add_option("--frame-steps", o.frameSteps, "Scripted: step the timeline this many frames, timing each frame's first image")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--play", o.play, "Scripted: press Play once the first image shows (each frame renders to the timeline's spp, 16, then steps); a screenshot waits for the first step to another frame (or a pause), and Play is pressed again before it");
+  app.add_option("--open-image", o.openImagePath,
+                 "Scripted: File > Open image once the first image shows: an EXR kept as a snapshot and compared with the live render "
+                 "(in the comparison: the panes' reference)");
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
   app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(candela::finitePositive());

@@ -185,6 +185,12 @@ float autoExposureStops(const std::vector<float>& rgb) {
   return std::clamp(static_cast<float>(std::log2(0.18 / key)), -16.0f, 16.0f);
 }
 
+bool isExrPath(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".exr";
+}
+
 void writeImage(const std::string& path, const Image& image) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);

@@ -26,6 +26,7 @@ struct DisplayImage {
 };
 
 void writeExr(const std::string& path, const Image& image);
+bool isExrPath(const std::string& path);  // ends in .exr, any case
 Image readExr(const std::string& path);
 // Applies exposure (stops) and the sRGB transfer function, clamps, writes 8-bit RGB.
 void writePng(const std::string& path, const Image& image, float exposureStops = 0.0f);

@@ -115,16 +115,24 @@ Sample cloud(const Vec3& q, const Noise& noise, uint32_t seed) {
 
 Sample plume(const Vec3& q, const Noise& noise) {
   // A rising, widening column that sways with height; hot at the base, breaking into tongues above.
+  // It lives inside its box: a rounded source at the bottom, smoke that thins out before the top and
+  // the sides, so no face of the box shows as a flat cut.
   const float h = 0.5f * (q.y + 1.0f);
   const Vec2 centre(0.35f * h * noise(Vec3(0.0f, h * 1.6f, 3.0f)), 0.35f * h * noise(Vec3(9.0f, h * 1.6f, 1.0f)));
-  const float radius = 0.38f + 0.42f * h;
+  // Narrow at the source, opening out as it rises.
+  const float radius = 0.2f + 0.6f * std::sqrt(h);
   const float r = glm::length(Vec2(q.x, q.z) - centre) / radius;
   const float n = noise.fbm(Vec3(q.x * 2.6f, q.y * 1.8f - 1.2f * h, q.z * 2.6f), 5);
   const float shape = 1.0f - r + 0.7f * n;
+  const float inside = smoothstep(0.0f, 0.12f, h) * (1.0f - smoothstep(0.55f, 0.97f, h)) *
+                       (1.0f - smoothstep(0.7f, 0.97f, std::max(std::abs(q.x), std::abs(q.z))));
   Sample s;
-  s.density = smoothstep(0.0f, 0.5f, shape) * (1.0f - 0.45f * h);
+  s.density = smoothstep(0.0f, 0.5f, shape) * (1.0f - 0.45f * h) * inside;
   const float flicker = noise.fbm(Vec3(q.x * 4.0f + 3.0f, q.y * 3.0f, q.z * 4.0f), 3);
-  s.temperature = smoothstep(0.05f, 0.9f, shape + 0.35f * flicker) * std::pow(std::max(0.0f, 1.0f - h), 1.3f);
+  // The flame: a rounded base that tapers into tongues, hottest low on the axis.
+  const float core = 1.0f - glm::length(Vec2(q.x, q.z) - centre) / (0.2f + 0.45f * std::sqrt(h)) - 1.0f * h;
+  s.temperature = smoothstep(0.05f, 0.9f, std::min(shape, core + 0.5f * n + 0.2f) + 0.35f * flicker) *
+                  std::pow(std::max(0.0f, 1.0f - h), 1.3f) * smoothstep(0.0f, 0.08f, h);
   return s;
 }
 
@@ -141,6 +149,15 @@ std::string cacheDirectory() {
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return (fs::path(xdg) / "candela").string();
   if (const char* home = std::getenv("HOME"); home && *home) return (fs::path(home) / ".cache" / "candela").string();
   return "/tmp/candela-cache";
+}
+
+float standaloneDensity(const std::string& type) {
+  // The sigma_t_scale the shipped scenes give each shape (cloud.json, fire.json, torch-in-mist.json).
+  if (type == "cloud") return 12.0f;
+  if (type == "torch") return 6.0f;
+  if (type == "plume") return 1.5f;
+  if (type == "mist") return 0.1f;
+  return 1.0f;
 }
 
 void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path) {
@@ -184,6 +201,8 @@ void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path) {
         } else {
           throw InputError("generator.type: unknown generator \"" + gen.type + "\"");
         }
+        // A shape's density peaks at 1; `value` scales it (standaloneDensity).
+        if (gen.type == "torch" || gen.type == "mist" || gen.type == "cloud" || gen.type == "plume") s.density *= gen.value;
         const size_t idx = (static_cast<size_t>(k) * dims.y + j) * dims.x + i;
         density[idx] = s.density;
         temperature[idx] = s.density > 0.0f ? s.temperature : 0.0f;
@@ -225,7 +244,7 @@ void writeGeneratedVolume(const GeneratorDesc& gen, const std::string& path) {
 std::string cachedGeneratedVolume(const GeneratorDesc& gen) {
   namespace fs = std::filesystem;
   // Bump the version when a generator changes so stale cache entries are not reused.
-  const std::string key = "generator-v1 " + toJson(gen).dump();
+  const std::string key = "generator-v3 " + toJson(gen).dump();
   uint64_t h = 0x1234567ULL;
   for (char c : key) h = hashCombine(h, static_cast<uint64_t>(static_cast<unsigned char>(c)));
   char name[64];

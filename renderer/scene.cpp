@@ -207,6 +207,7 @@ std::shared_ptr<Scene> Scene::build(const SceneDesc& desc, std::vector<std::stri
     }
   }
   if (lo.x <= hi.x) {
+    scene->boundsMin_ = lo, scene->boundsMax_ = hi;
     scene->center_ = 0.5f * (lo + hi);
     scene->radius_ = std::max(1e-3f, 0.5f * glm::length(hi - lo));
   } else {

@@ -68,6 +68,10 @@ class Scene {
   bool hasPerLengthEmission() const { return hasPerLengthEmission_; }
   float radius() const { return radius_; }
   Vec3 center() const { return center_; }
+  // The box of the volumes and bounded surfaces (ground planes excluded); empty (min > max) when
+  // there are none.
+  Vec3 boundsMin() const { return boundsMin_; }
+  Vec3 boundsMax() const { return boundsMax_; }
 
   // Coefficients of all media at a world point (outside the hot tracking loop: probes and guided
   // vertices). shares[i] is medium i's mu_s (albedo average); returns their sum.
@@ -127,6 +131,7 @@ class Scene {
   std::atomic<bool> cancelProbes_{false};
   float radius_ = 1.0f;
   Vec3 center_{0.0f};
+  Vec3 boundsMin_{1.0f}, boundsMax_{-1.0f};
 };
 
 // Whether the rays after the camera ray that guiding.secondary_rays names may get a guided sample in

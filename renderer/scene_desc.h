@@ -42,7 +42,7 @@ struct GeneratorDesc {
   uint32_t seed = 1;
   int resolution = 64;            // voxels along the longest axis
   Vec3 size{1.0f};                // world extent of the generated grid before the volume transform
-  float value = 1.0f;             // density of constant/ramp volumes (ramp: density at the +x end)
+  float value = 1.0f;             // density of constant/ramp volumes (ramp: density at the +x end); shapes: their peak
   float temperature = 0.0f;       // constant/ramp: temperature written everywhere the density is
 
   template <class V>
@@ -51,7 +51,7 @@ struct GeneratorDesc {
     v.field("seed", seed, "Noise seed");
     v.field("resolution", resolution, "Voxels along the longest axis", Range{2, 1024});
     v.field("size", size, "World extent of the grid (before the transform)", Range{1e-4, 1e6});
-    v.field("value", value, "constant/ramp: density (ramp: at the +x end, 0 at the -x end)", Range{0.0, 1e6});
+    v.field("value", value, "constant/ramp: density (ramp: at the +x end, 0 at the -x end); torch, mist, cloud, plume: multiplies the shape's density (peak 1)", Range{0.0, 1e6});
     v.field("temperature", temperature, "constant/ramp: temperature grid value where density is non-zero", Range{0.0, 1e6});
   }
 };

@@ -51,10 +51,21 @@ std::string VdbImportReport::summary() const {
 LightDesc defaultSun() {
   LightDesc sun;
   sun.type = LightType::Directional;
-  sun.direction = glm::normalize(Vec3(-0.5f, -0.75f, -0.45f));
+  // From the side of the opened volume's three-quarter view (frameCamera's direction), about 100
+  // degrees round from the camera and 35 degrees up: smoke shows a lit and a shadowed side.
+  sun.direction = glm::normalize(Vec3(-0.68f, -0.57f, 0.46f));
   sun.color = Vec3(1.0f, 0.93f, 0.82f);
   sun.intensity = 3.0f;
   return sun;
+}
+
+SurfaceDesc defaultGround(float height, float radius) {
+  SurfaceDesc ground;
+  ground.type = SurfaceType::Plane;
+  ground.height = height;
+  ground.size = 50.0f * std::max(radius, 1e-3f);  // to the horizon from the framed view
+  ground.albedo = Vec3(0.18f);  // mid grey: the volume, not the ground, draws the eye
+  return ground;
 }
 
 LightDesc defaultSky() {
@@ -225,6 +236,7 @@ SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& optio
   frameCamera(scene.camera, lo, hi, Vec3(0.45f, 0.25f, 1.0f));
 
   if (options.light_rig) scene.lights = {defaultSun(), defaultSky()};
+  if (options.ground) scene.surfaces = {defaultGround(lo.y, 0.5f * glm::length(hi - lo))};
   // A new scene: the auto strategy chooses (auto_strategy.h).
   scene.strategy = strategyPreset("auto");
   if (reportOut) *reportOut = report;

@@ -24,11 +24,13 @@ struct EnumNames<UpAxis> {
 struct VdbImportOptions {
   UpAxis up = UpAxis::Auto;  // auto: Z-up when the file says Blender wrote it, else Y-up
   bool light_rig = true;     // a sun and a sky; without it only emission lights the volume
+  bool ground = true;        // a grey ground plane under the volume that catches its shadow
 
   template <class V>
   void visit(V& v) {
     v.field("up", up, "Up axis of the file: auto (Z when Blender wrote it, else Y), y or z");
     v.field("light_rig", light_rig, "Add the default sun and sky");
+    v.field("ground", ground, "Add a ground plane under the volume that catches its shadow");
   }
 };
 
@@ -57,9 +59,12 @@ bool isVdbPath(const std::string& path);
 // the file when no density grid is found (listing the grids present).
 SceneDesc sceneFromVdb(const std::string& vdbPath, const VdbImportOptions& options = {}, VdbImportReport* report = nullptr);
 
-// The default light rig: a warm sun from above-left-front and a pale blue sky.
+// The default light rig: a warm sun from the side of the opened view and a pale blue sky.
 LightDesc defaultSun();
 LightDesc defaultSky();
+// The ground an opened volume stands on: a grey plane at `height` (the bottom of its bounds), reaching
+// far past a volume of bounding radius `radius`.
+SurfaceDesc defaultGround(float height, float radius);
 
 // Points the camera at the world box lo..hi from `direction` (from the target toward the camera),
 // far enough that the box's bounding sphere fills the narrower field of view.

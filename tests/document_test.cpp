@@ -1,6 +1,7 @@
 // The viewer's document machinery, headless: undo/redo grouping, snapshots on disk, frame patterns.
 #include "edit_history.h"
 #include "field_labels.h"
+#include "histogram.h"
 #include "message_severity.h"
 #include "procedural.h"
 #include "sequence.h"
@@ -89,6 +90,20 @@ TEST(Panels, MessagesHaveASeverity) {
   EXPECT_EQ(messageSeverity("edit rejected: a.json: volumes.0.g: expected a value from -0.999 to 0.999"), Severity::Error);
   EXPECT_EQ(messageSeverity("could not open x.vdb: no such file (still showing the last good scene)"), Severity::Error);
   EXPECT_EQ(messageSeverity("save failed: cannot write"), Severity::Error);
+}
+
+// The histogram counts display values by luminance and what the screen clips.
+TEST(Panels, HistogramCountsClipping) {
+  const std::vector<float> rgb{0.0f, 0.0f, 0.0f,  1.0f, 0.2f, 0.2f,  0.5f, 0.5f, 0.5f,  0.99f, 0.99f, 0.99f};
+  const DisplayHistogram h = displayHistogram(rgb, 4);
+  EXPECT_EQ(h.total, 4u);
+  EXPECT_EQ(h.over, 1u);
+  EXPECT_EQ(h.under, 1u);
+  EXPECT_FLOAT_EQ(h.counts[0], 1.0f);  // black
+  EXPECT_FLOAT_EQ(h.counts[2], 1.0f);  // mid grey
+  EXPECT_FLOAT_EQ(h.counts[3], 1.0f);  // near white
+  EXPECT_FLOAT_EQ(h.counts[1], 1.0f);  // the clipped red's luminance, 0.37
+  EXPECT_DOUBLE_EQ(h.overShare(), 0.25);
 }
 
 // A scene file without display.exposure asks for auto exposure; one with it keeps it, and the

@@ -55,6 +55,20 @@ if(MODE STREQUAL "screenshot")
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[320,180]
               --screenshot ${OUT}/gui.png --after-spp 8 --quit)
   run_checked(${COMPARE} ${OUT}/gui.png ${OUT}/gui.exr ${OUT}/cli.exr 8)
+  # File > Open image: the CLI's EXR kept as a snapshot and compared with the live render.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[320,180] --open-image ${OUT}/cli.exr
+              --screenshot ${OUT}/opened.png --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "opened ${OUT}/cli.exr as snapshot")
+  metadata(${OUT}/opened-compare.png compared_snapshot snapshot)
+  expect_contains("${snapshot}" "cli.exr")
+  # A file that is not an EXR: a clear message; the render goes on and the screenshot is taken (the
+  # scripted run exits 1 for the failed step).
+  execute_process(COMMAND ${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --open-image ${SCENE} --screenshot ${OUT}/not-exr.png
+                  --after-spp 2 --quit RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 120)
+  expect_contains("${out}${err}" "expected an OpenEXR image")
+  if(NOT rc EQUAL 1 OR NOT EXISTS ${OUT}/not-exr.png)
+    message(FATAL_ERROR "opening a scene file as an image: exit ${rc} (expected 1) and a screenshot still taken")
+  endif()
 elseif(MODE STREQUAL "inspect")
   # The guide inspector opened on a pixel as a Ctrl+click would: its chart's variance factors.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy full --set camera.resolution=[160,90] --inspect 95,40
@@ -178,6 +192,12 @@ elseif(MODE STREQUAL "open_vdb")
     expect_contains("${opened}" "Y-up")
     metadata(${OUT}/${type}.png document document)
     expect_contains("${document}" "${type}.json")
+    # A ground plane under it catches its shadow.
+    metadata(${OUT}/${type}.png settings settings)
+    string(JSON ground GET "${settings}" surfaces 0 type)
+    if(NOT ground STREQUAL "plane")
+      message(FATAL_ERROR "${type}.vdb opened without a ground plane")
+    endif()
     # Opened and not touched: nothing to save, so switching files or quitting asks nothing.
     metadata(${OUT}/${type}.png unsaved_edits unsaved)
     if(NOT unsaved STREQUAL "no")

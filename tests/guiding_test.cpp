@@ -448,7 +448,7 @@ TEST(CameraGuides, BrightPixelsGetTheGuidedVertexMoreOften) {
         raised += guide->guidedProbability > 0.1f;
         kept += guide->guidedProbability == 0.1f;
       }
-    EXPECT_GT(raised, 10) << file;
+    EXPECT_GT(raised, 0) << file << ": some pixel is bright enough to be raised";
     EXPECT_GT(kept, 20) << file;
     if (emits) {
       EXPECT_GT(heldBack, 10) << file << ": the flame's pixels see their own emission";

@@ -8,9 +8,9 @@
 
 namespace candela {
 
-ComparisonSession::ComparisonSession(RenderOptions options) : options_(options) {
-  worker_ = std::thread([this] {
-    lowerThisThreadsPriority();  // the UI thread comes first (thread_priority.h)
+ComparisonSession::ComparisonSession(RenderOptions options, bool yieldToUi) : options_(options) {
+  worker_ = std::thread([this, yieldToUi] {
+    if (yieldToUi) lowerThisThreadsPriority();  // the UI thread comes first (thread_priority.h)
     workerLoop();
   });
 }

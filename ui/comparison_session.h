@@ -70,7 +70,8 @@ struct ComparisonFrame {
 
 class ComparisonSession {
  public:
-  explicit ComparisonSession(RenderOptions options = {});
+  // `yieldToUi`: as RenderSession's.
+  explicit ComparisonSession(RenderOptions options = {}, bool yieldToUi = false);
   ~ComparisonSession();
   ComparisonSession(const ComparisonSession&) = delete;
   ComparisonSession& operator=(const ComparisonSession&) = delete;

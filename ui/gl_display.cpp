@@ -100,8 +100,15 @@ std::string GlDisplay::setPipeline(const ColorPipeline& pipeline, const DisplayS
 in vec2 uv;
 out vec4 fragColor;
 uniform sampler2D sceneLinear;
+uniform int clippingView;
 void main() {
   fragColor = OCIODisplay(vec4(texture(sceneLinear, uv).rgb, 1.0));
+  // The clipping view: display values the screen cannot show, in false colour (red: a channel at
+  // or past white; blue: every channel at black).
+  if (clippingView != 0) {
+    if (any(greaterThanEqual(fragColor.rgb, vec3(1.0)))) fragColor.rgb = vec3(1.0, 0.0, 0.0);
+    else if (all(lessThanEqual(fragColor.rgb, vec3(0.0)))) fragColor.rgb = vec3(0.0, 0.25, 1.0);
+  }
 }
 )";
   std::string log;
@@ -201,6 +208,7 @@ void GlDisplay::renderOutput(int width, int height) {
   glDisable(GL_BLEND);
   glDisable(GL_SCISSOR_TEST);
   glUseProgram(program_);
+  glUniform1i(glGetUniformLocation(program_, "clippingView"), clippingView_ ? 1 : 0);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, image_);
   for (size_t i = 0; i < luts_.size(); ++i) {

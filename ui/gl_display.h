@@ -40,6 +40,8 @@ class GlDisplay {
   void blitToWindow(int x, int y, int w, int h, bool nearest, ViewWindow view = ViewWindow(), float from = 0.0f, float to = 1.0f) const;
   // The output as 8-bit RGB, top row first (what the window shows, before window scaling).
   std::vector<uint8_t> readOutput() const;
+  // Red over the pixels at or past display white, blue over those at black (from the next renderOutput).
+  void setClippingView(bool on) { clippingView_ = on; }
   int outputWidth() const { return outW_; }
   int outputHeight() const { return outH_; }
 
@@ -53,6 +55,7 @@ class GlDisplay {
   GLuint program_ = 0, vao_ = 0, vbo_ = 0, image_ = 0, fbo_ = 0, output_ = 0;
   std::vector<LutTexture> luts_;
   int outW_ = 0, outH_ = 0;
+  bool clippingView_ = false;
 };
 
 }  // namespace candela

@@ -22,14 +22,14 @@ SceneDiff diffScenes(const SceneDesc& a, const SceneDesc& b) {
   return d;
 }
 
-RenderSession::RenderSession(RenderOptions options) : options_(options) {
+RenderSession::RenderSession(RenderOptions options, bool yieldToUi) : options_(options) {
   // Both yield to the UI thread, and so do the TBB workers they start (thread_priority.h).
-  worker_ = std::thread([this] {
-    lowerThisThreadsPriority();
+  worker_ = std::thread([this, yieldToUi] {
+    if (yieldToUi) lowerThisThreadsPriority();
     workerLoop();
   });
-  loader_ = std::thread([this] {
-    lowerThisThreadsPriority();
+  loader_ = std::thread([this, yieldToUi] {
+    if (yieldToUi) lowerThisThreadsPriority();
     loaderLoop();
   });
 }
@@ -244,6 +244,7 @@ void RenderSession::workerLoop() {
     if (const SplitMap* split = renderer ? renderer->adaptiveSplit() : nullptr) frame->adaptiveSplit = split->summary(), frame->meanSplit = split->meanSplit;
     frame->sceneCenter = scene->center();
     frame->sceneRadius = scene->radius();
+    frame->sceneMin = scene->boundsMin(), frame->sceneMax = scene->boundsMax();
     return frame;
   };
 
@@ -351,6 +352,7 @@ void RenderSession::workerLoop() {
     // Aim for passes of about a tenth of a second: frequent updates, little per-pass overhead.
     if (passSeconds < 0.05) passSpp = std::min(passSpp * 2, 256);
     else if (passSeconds > 0.25 && passSpp > 1) passSpp /= 2;
+    if (paused_) continue;  // a pass that ended as the pause came: its samples show on resume
     auto frame = makeFrame();
     frame->film = film;
     frame->samplesPerSecond = seconds > 0.0 ? film.spp() * double(film.width()) * film.height() / seconds : 0.0;

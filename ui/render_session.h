@@ -44,11 +44,14 @@ struct Frame {
   double meanSplit = 1.0;     // ... its camera samples per film sample, over the pixels
   Vec3 sceneCenter{0.0f};   // bounds of the scene's content, for framing the camera
   float sceneRadius = 1.0f;
+  Vec3 sceneMin{1.0f}, sceneMax{-1.0f};  // the box of the volumes and bounded surfaces (empty when min > max)
 };
 
 class RenderSession {
  public:
-  explicit RenderSession(RenderOptions options = {});
+  // `yieldToUi`: its threads lower their priority below the UI thread's (thread_priority.h); the
+  // viewer's sessions do, a headless user's need not.
+  explicit RenderSession(RenderOptions options = {}, bool yieldToUi = false);
   ~RenderSession();
   RenderSession(const RenderSession&) = delete;
   RenderSession& operator=(const RenderSession&) = delete;

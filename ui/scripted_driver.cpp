@@ -116,6 +116,11 @@ void ScriptedDriver::step(Viewer& v) {
       for (const auto& p : frame->panes) done = done && p.film && p.seconds >= o.equalTime;
       if (done) v.writeFigure(o.figurePath);
     }
+    if (!o.openImagePath.empty() && !imageOpened_ && frame && frame->status.empty()) {
+      imageOpened_ = true;
+      if (!v.openImage(o.openImagePath, true)) v.exitCode_ = 1;
+      return;
+    }
     // --screenshot: the figure and every pane, once every pane has the spp or seconds asked for.
     if (!o.screenshotPath.empty() && !screenshotDone_ && frame && frame->status.empty() && !frame->panes.empty()) {
       bool ready = true;
@@ -171,6 +176,11 @@ void ScriptedDriver::step(Viewer& v) {
       std::printf("scripted: paused on frame %d\n", v.edited_.render.frame);
       std::fflush(stdout);
     }
+  }
+  if (!o.openImagePath.empty() && !imageOpened_) {
+    imageOpened_ = true;
+    if (!v.openImage(o.openImagePath, false)) v.exitCode_ = 1;
+    return;
   }
   // A snapshot of the first image, compared with the live render once the edits below land.
   if (o.snapshotCompare && !snapshotDone_) {

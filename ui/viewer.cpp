@@ -36,7 +36,7 @@ fs::file_time_type modificationTime(const std::string& path) {
 Viewer::Viewer(GLFWwindow* window, const ViewerOptions& options)
     : window_(window),
       options_(options),
-      session_(RenderOptions{options.threads, 32}),
+      session_(RenderOptions{options.threads, 32}, /*yieldToUi=*/true),
       canvas_(window),
       snapshots_(SnapshotStore::sessionDirectory()) {
   openStart_ = ViewerClock::now();
@@ -336,8 +336,11 @@ void Viewer::report(const std::string& text) {
 void Viewer::applyDisplay() {
   const std::string error = gl_->setPipeline(colors_, display_);
   if (!error.empty()) report(error);
+  gl_->setClippingView(clippingView_);
   outputDirty_ = true;
+  histogramVersion_ = 0;  // the histogram is of display values: computed again
   for (size_t i = 0; i < paneGl_.size(); ++i) {
+    paneGl_[i]->setClippingView(clippingView_);
     paneGl_[i]->setPipeline(colors_, paneDisplay());
     paneDirty_[i] = true;
   }
@@ -398,6 +401,8 @@ void Viewer::pollSession() {
     if (reframeOnNextImage_ && !latest->preview && latest->scene && !latest->scene->volumes.empty() && !edited_.volumes.empty() &&
         toJson(latest->scene->volumes[0]) == toJson(edited_.volumes[0])) {
       reframeOnNextImage_ = false;
+      // The volume turned upright: the ground goes under it again, and the camera frames it.
+      if (hasGround()) placeGround(true);
       frameVolume();
     }
   }
@@ -494,6 +499,19 @@ float Viewer::imageAspect() const {
   if (compare_ && compFrame_ && compFrame_->width > 0) return static_cast<float>(compFrame_->width) / static_cast<float>(compFrame_->height);
   if (frame_) return static_cast<float>(frame_->width) / static_cast<float>(frame_->height);
   return 0.0f;
+}
+
+bool Viewer::hasGround() const {
+  return std::any_of(edited_.surfaces.begin(), edited_.surfaces.end(), [](const SurfaceDesc& s) { return s.type == SurfaceType::Plane; });
+}
+
+void Viewer::placeGround(bool on) {
+  auto& surfaces = edited_.surfaces;
+  surfaces.erase(std::remove_if(surfaces.begin(), surfaces.end(), [](const SurfaceDesc& s) { return s.type == SurfaceType::Plane; }),
+                 surfaces.end());
+  if (on && frame_ && frame_->sceneMin.x <= frame_->sceneMax.x)
+    surfaces.push_back(defaultGround(frame_->sceneMin.y, 0.5f * glm::length(frame_->sceneMax - frame_->sceneMin)));
+  submitEdit();
 }
 
 void Viewer::resetCamera() {
@@ -596,7 +614,7 @@ void Viewer::startComparisonMode(const std::string& path) {
     canvas_.setWipe(options_.wipe && paneSpecs_.size() == 2);
     if (options_.paneView == "absolute") paneView_ = PaneView::AbsoluteError;
     if (options_.paneView == "relative") paneView_ = PaneView::RelativeError;
-    compare_ = std::make_unique<ComparisonSession>(RenderOptions{options_.threads, 32});
+    compare_ = std::make_unique<ComparisonSession>(RenderOptions{options_.threads, 32}, /*yieldToUi=*/true);
     compare_->setNotify([] { glfwPostEmptyEvent(); });
     if (!options_.referencePath.empty()) reference_ = readExr(options_.referencePath);
     restartComparison();

@@ -58,6 +58,9 @@ struct ViewerOptions {
   int frameSteps = 0;
   // Press Play once the first image shows: each frame renders to the timeline's spp, then steps.
   bool play = false;
+  // File > Open image, scripted: once the first image shows, this EXR becomes a snapshot compared
+  // with the live render (in the comparison: the panes' reference).
+  std::string openImagePath;
 };
 
 // Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.

@@ -11,6 +11,7 @@
 #include "comparison_session.h"
 #include "edit_history.h"
 #include "gl_display.h"
+#include "histogram.h"
 #include "guide_inspector_view.h"
 #include "image_canvas.h"
 #include "param_editor.h"
@@ -114,6 +115,8 @@ class Viewer {
   void pollSceneFile();
   void pollDrops();
   void frameVolume();
+  bool hasGround() const;       // a ground plane among the surfaces
+  void placeGround(bool on);    // under the volumes as they stand now (defaultGround), or none
   void resetCamera();  // the camera the document was opened with
   void handleCamera();
 
@@ -127,6 +130,9 @@ class Viewer {
 
   // --- snapshots and the timeline (viewer_panels.cpp) ---
   void takeSnapshot();
+  // File > Open image: an EXR (an earlier render, a reference) kept as a snapshot to compare with,
+  // or, in the comparison, as the reference the panes' errors are measured against.
+  bool openImage(const std::string& path, bool asReference);
   void compareSnapshot(int id);
   void drawSnapshots();
   void drawTimeline();
@@ -207,8 +213,8 @@ class Viewer {
 
   // Dialogs.
   std::deque<std::pair<std::string, ViewerClock::time_point>> messages_;
-  bool showMessages_ = false, showOpen_ = false, showSaveAs_ = false, showDiscard_ = false;
-  std::string openPath_, saveAsPath_;
+  bool showMessages_ = false, showOpen_ = false, showSaveAs_ = false, showDiscard_ = false, showOpenImage_ = false;
+  std::string openPath_, saveAsPath_, openImagePath_;
   std::vector<std::string> openCandidates_;
   std::string discardWhat_;
   std::function<void()> pendingAction_;
@@ -281,6 +287,11 @@ class Viewer {
   int busyFrames_ = 3;
   int exitCode_ = 0;
   bool paused_ = false;  // P: the render holds its samples until resumed
+  bool clippingView_ = false;  // H: red where the display clips at white, blue at black
+  DisplayHistogram histogram_;
+  uint64_t histogramVersion_ = 0;
+  ViewerClock::time_point histogramTime_;
+  void drawHistogram();
   void togglePause();
 };
 

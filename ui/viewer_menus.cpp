@@ -13,6 +13,7 @@ void Viewer::drawMenuBar() {
   const bool single = haveScene_ && !compare_;
   if (ImGui::BeginMenu("File")) {
     if (ImGui::MenuItem("Open scene or VDB...", "Ctrl+O")) showOpen_ = true;
+    if (ImGui::MenuItem("Open image (EXR)...", "Ctrl+I")) showOpenImage_ = true;
     if (ImGui::MenuItem("Save", "Ctrl+S", false, single)) requestSave();
     if (ImGui::MenuItem("Save As...", "Ctrl+Shift+S", false, single)) showSaveAs_ = true;
     if (ImGui::MenuItem("Reload scene", nullptr, false, !scenePath_.empty()))
@@ -34,6 +35,7 @@ void Viewer::drawMenuBar() {
     if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
     if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) resetCamera();
     if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked())) toggleReadoutLock();
+    if (ImGui::MenuItem("Clipping view", "H", clippingView_)) clippingView_ = !clippingView_, applyDisplay();
     if (ImGui::MenuItem("Fit image", "0", !canvas_.oneToOne())) canvas_.resetZoom();
     if (ImGui::MenuItem("Actual pixels (1:1)", "1", canvas_.oneToOne())) canvas_.setOneToOne(true);
     if (ImGui::MenuItem(paused_ ? "Resume rendering" : "Pause rendering", "P", paused_, !compare_)) togglePause();
@@ -123,6 +125,27 @@ void Viewer::drawDialogs() {
       ImGui::CloseCurrentPopup();
       confirmDiscard("open " + fs::path(path).filename().string(), [this, path] { openScene(path); });
     }
+    ImGui::EndPopup();
+  }
+
+  // --- Open image ---
+  if (showOpenImage_) {
+    showOpenImage_ = false;
+    ImGui::OpenPopup("Open image");
+  }
+  ImGui::SetNextWindowSize(ImVec2(640, 0), ImGuiCond_Appearing);
+  if (ImGui::BeginPopupModal("Open image")) {
+    ImGui::InputText("path", &openImagePath_);
+    ImGui::TextDisabled("An OpenEXR image: a render to compare with, or the comparison's reference.");
+    bool done = false;
+    if (ImGui::Button("As a snapshot")) done = openImage(openImagePath_, false);
+    if (compare_) {
+      ImGui::SameLine();
+      if (ImGui::Button("As the comparison's reference")) done = openImage(openImagePath_, true);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) done = true;
+    if (done) ImGui::CloseCurrentPopup();
     ImGui::EndPopup();
   }
 
@@ -223,6 +246,7 @@ void Viewer::handleKeys() {
         case GLFW_KEY_Y: redo(); break;
         case GLFW_KEY_S: k.shift() ? void(showSaveAs_ = true) : requestSave(); break;
         case GLFW_KEY_O: showOpen_ = true; break;
+        case GLFW_KEY_I: showOpenImage_ = true; break;
         case GLFW_KEY_Q: requestQuit(); break;
         default: break;
       }
@@ -268,6 +292,10 @@ void Viewer::handleKeys() {
       case GLFW_KEY_0: canvas_.resetZoom(); break;
       case GLFW_KEY_1: canvas_.setOneToOne(true); break;
       case GLFW_KEY_P: togglePause(); break;
+      case GLFW_KEY_H:
+        clippingView_ = !clippingView_;
+        applyDisplay();
+        break;
       default: break;
     }
   }

@@ -219,6 +219,43 @@ void Viewer::drawComparisonPanel() {
   if (ImGui::Button("Restart")) restartComparison();
 }
 
+// Display values by luminance, with what the screen clips; recomputed at most four times a second
+// from the image shown (the live render, or the comparison's first pane), and only while open.
+void Viewer::drawHistogram() {
+  if (!ImGui::TreeNode("Histogram and clipping")) return;
+  if (ImGui::Checkbox("Clipping view (H): red at white, blue at black", &clippingView_)) applyDisplay();
+  const Film* film = frame_ && !frame_->preview ? &frame_->film : nullptr;
+  uint64_t version = frame_ ? frame_->version : 0;
+  if (!film && compFrame_)
+    for (const auto& p : compFrame_->panes)
+      if (p.film) {
+        film = p.film.get(), version = compFrame_->version;
+        break;
+      }
+  if (film && version != histogramVersion_ && secondsSince(histogramTime_) > 0.25) {
+    std::vector<float> rgb = film->meanImage();
+    colors_.applyCpu(display_, rgb);
+    histogram_ = displayHistogram(rgb, 64);
+    histogramVersion_ = version;
+    histogramTime_ = ViewerClock::now();
+  }
+  if (histogram_.total > 0) {
+    const float peak = *std::max_element(histogram_.counts.begin(), histogram_.counts.end());
+    ImGui::PlotHistogram("##histogram", histogram_.counts.data(), static_cast<int>(histogram_.counts.size()), 0, nullptr, 0.0f, peak,
+                         ImVec2(ImGui::GetContentRegionAvail().x, 70.0f));
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Pixels by display luminance, black (left) to white (right)");
+    const ImVec4 warn(1.0f, 0.75f, 0.3f, 1.0f);
+    ImGui::TextColored(histogram_.overShare() > 0.01 ? warn : ImGui::GetStyleColorVec4(ImGuiCol_Text), "clipped at white %.1f%%",
+                       100.0 * histogram_.overShare());
+    ImGui::SameLine();
+    ImGui::TextColored(histogram_.underShare() > 0.01 ? warn : ImGui::GetStyleColorVec4(ImGuiCol_Text), "  at black %.1f%%",
+                       100.0 * histogram_.underShare());
+  } else {
+    ImGui::TextDisabled("no image yet");
+  }
+  ImGui::TreePop();
+}
+
 void Viewer::drawPanel() {
   int ww, wh;
   glfwGetWindowSize(window_, &ww, &wh);
@@ -237,6 +274,7 @@ void Viewer::drawPanel() {
     DisplaySettings d = display_;
     d.visit(editor);
     if (editor.changed) setDisplay(d, "panel");
+    drawHistogram();
     if (!importSummary_.empty()) {
       ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
       ImGui::TextWrapped("Opened as a volume: %s", importSummary_.c_str());
@@ -253,6 +291,9 @@ void Viewer::drawPanel() {
       if (ImGui::RadioButton("Y", !zUp) && zUp) setUp(0.0f);
       ImGui::SameLine();
       if (ImGui::RadioButton("Z (Blender)", zUp) && !zUp) setUp(-90.0f);
+      bool ground = hasGround();
+      if (ImGui::Checkbox("Ground plane", &ground)) placeGround(ground);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("A grey plane under the volume that catches its shadow (surfaces, type plane)");
     }
   }
   drawSnapshots();
@@ -508,6 +549,34 @@ void Viewer::takeSnapshot() {
     report("snapshot " + s.label + " kept in " + s.path);
   } catch (const std::exception& e) {
     report(std::string("snapshot failed: ") + e.what());
+  }
+}
+
+bool Viewer::openImage(const std::string& path, bool asReference) {
+  try {
+    if (!isExrPath(path)) throw InputError(path + ": expected an OpenEXR image (.exr)");
+    Image image = readExr(path);
+    if (asReference) {
+      if (!compare_) throw InputError(path + ": a reference is for the comparison view (--panes, or candela with no scene)");
+      if (compFrame_ && (image.width != compFrame_->width || image.height != compFrame_->height))
+        throw InputError(path + ": expected a " + std::to_string(compFrame_->width) + "x" + std::to_string(compFrame_->height) +
+                         " image, the panes' size; got " + std::to_string(image.width) + "x" + std::to_string(image.height));
+      reference_ = std::move(image);
+      restartComparison();
+      report("reference: " + path + " (the panes' errors are measured against it)");
+      return true;
+    }
+    int spp = 0;
+    if (auto it = image.metadata.find("spp"); it != image.metadata.end()) spp = std::atoi(it->second.c_str());
+    const Snapshot& s = snapshots_.add(image, lookState(), spp, fs::path(path).filename().string());
+    thumbnails_[s.id] = uploadThumbnail(s);
+    showSnapshots_ = true;
+    report("opened " + path + " as snapshot " + s.label);
+    if (frame_ && !compare_ && image.width == frame_->width && image.height == frame_->height) compareSnapshot(s.id);
+    return true;
+  } catch (const std::exception& e) {
+    report(std::string("could not open the image: ") + e.what());
+    return false;
   }
 }
 
