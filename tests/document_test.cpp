@@ -5,6 +5,7 @@
 #include "message_severity.h"
 #include "procedural.h"
 #include "sequence.h"
+#include "sequence_render.h"
 #include "snapshot_store.h"
 #include "test_support.h"
 
@@ -212,6 +213,65 @@ TEST(Sequences, PatternsSubstituteAndFindFramesOnDisk) {
   EXPECT_EQ(pattern, (dir / "smoke.####.vdb").string());
   EXPECT_EQ(frame, 4);
   EXPECT_FALSE(detectSequence((dir / "smoke.vdb").string(), pattern, frame));
+}
+
+// File > Render sequence: every frame rendered as a batch render of it renders (the same samples),
+// written under its numbered name with no temporary file left; a missing frame is reported and
+// passed; a cancelled job writes nothing more, and never a partial file.
+TEST(Sequences, TheViewerRendersASequenceToDisk) {
+  const fs::path dir = test::scratchDirectory("render-sequence");
+  for (int f = 1; f <= 3; ++f) {
+    if (f == 2) continue;  // a hole in the sequence
+    GeneratorDesc gen;
+    gen.type = "constant";
+    gen.resolution = 8;
+    gen.value = static_cast<float>(f);
+    writeGeneratedVolume(gen, (dir / ("box." + std::to_string(f) + ".vdb")).string());
+  }
+  SceneDesc scene = test::loadScene("assets/scenes/test/furnace.json");
+  scene.path = (dir / "scene.json").string();
+  scene.volumes[0].has_generator = false;
+  scene.volumes[0].file = "box.$F.vdb";
+  scene.camera.resolution = {8, 6};
+  SequenceRenderRequest request;
+  request.scene = scene;
+  request.first = 1, request.last = 3, request.spp = 8;
+  request.pattern = (dir / "out" / "box.####.exr").string();
+  SequenceRenderJob job;
+  job.start(request);
+  job.wait();
+  const SequenceProgress p = job.progress();
+  EXPECT_FALSE(p.running);
+  EXPECT_EQ(p.done, 3);
+  ASSERT_EQ(p.written.size(), 2u);
+  ASSERT_EQ(p.failed.size(), 1u);
+  EXPECT_NE(p.failed[0].find("frame 2"), std::string::npos) << p.failed[0];
+  EXPECT_FALSE(fs::exists(dir / "out" / "box.0002.exr"));
+  scene.render.frame = 3;
+  const Image written = readExr((dir / "out" / "box.0003.exr").string());
+  // The same samples (passes of another size sum them in another order: float rounding apart).
+  const std::vector<float> batch = test::render(scene, 8).meanImage();
+  ASSERT_EQ(written.rgb.size(), batch.size());
+  for (size_t i = 0; i < batch.size(); ++i) EXPECT_NEAR(written.rgb[i], batch[i], 1e-4f * std::max(1.0f, batch[i])) << i;
+  for (const auto& entry : fs::directory_iterator(dir / "out")) EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos);
+
+  // Cancelled at once: nothing past what was written, no partial file.
+  request.pattern = (dir / "cancelled" / "box.####.exr").string();
+  request.spp = 1 << 20;
+  job.start(request);
+  job.cancel();
+  job.wait();
+  EXPECT_TRUE(job.progress().cancelled);
+  EXPECT_TRUE(!fs::exists(dir / "cancelled") || fs::is_empty(dir / "cancelled"));
+
+  // A bad request is an error before anything renders.
+  request.pattern = (dir / "no-pattern.exr").string();
+  EXPECT_THROW(job.start(request), InputError);
+  request.pattern = (dir / "x.####.tif").string();
+  EXPECT_THROW(job.start(request), InputError);
+  request.pattern = (dir / "x.####.exr").string();
+  request.first = 5, request.last = 4;
+  EXPECT_THROW(job.start(request), InputError);
 }
 
 TEST(Sequences, ASceneRendersTheFrameItNames) {

@@ -502,6 +502,18 @@ elseif(MODE STREQUAL "timeline")
     endif()
   endforeach()
   run_checked(${COMPARE} ${OUT}/timeline.png ${OUT}/timeline.exr ${OUT}/cli/fire.0003.exr 4)
+  # File > Render sequence from the viewer: every frame written, each the CLI's render of it, and no
+  # temporary file left beside them.
+  run_checked(${XVFB} ${VIEWER} ${OUT}/seq/fire.0001.vdb --set camera.resolution=[160,90] --render-sequence "${OUT}/gui-seq/fire.####.exr"
+              --after-spp 4 --quit)
+  expect_contains("${LAST_OUTPUT}" "render sequence: wrote 3 of 3 frames")
+  foreach(f 1 2 3)
+    run_checked(${COMPARE} --same-exr ${OUT}/gui-seq/fire.000${f}.exr ${OUT}/cli/fire.000${f}.exr)
+  endforeach()
+  file(GLOB leftovers ${OUT}/gui-seq/.*partial*)
+  if(leftovers)
+    message(FATAL_ERROR "temporary files left: ${leftovers}")
+  endif()
   # A sequence with a broken frame (a sim frame that failed to write), played: the viewer reports
   # the frame once and plays on past it, as a flipbook plays over a hole. It used to retry the frame
   # on every image (hundreds of the same error a second, the timeline stuck).

@@ -17,7 +17,8 @@ bool ScriptedDriver::measuring(const Viewer& v) const {
 
 bool ScriptedDriver::active(const Viewer& v) const {
   const ViewerOptions& o = v.options_;
-  return measuring(v) || !o.screenshotPath.empty() || !o.figurePath.empty() || o.frameSteps > 0 || !o.saveAsPath.empty();
+  return measuring(v) || !o.screenshotPath.empty() || !o.figurePath.empty() || o.frameSteps > 0 || !o.saveAsPath.empty() ||
+         !o.renderSequencePattern.empty();
 }
 
 void ScriptedDriver::editMeasured(double ms) {
@@ -244,6 +245,24 @@ void ScriptedDriver::step(Viewer& v) {
     screenshotDone_ = true;
     if (!v.screenshot(o.screenshotPath)) v.exitCode_ = 1;
     return;  // the canvas capture (if any) happens in the next frame's draw
+  }
+  if (!o.renderSequencePattern.empty()) {
+    if (!sequenceStarted_) {
+      sequenceStarted_ = true;
+      SequenceRenderRequest r;
+      r.scene = v.edited_;
+      r.scene.display = v.display_;
+      r.first = v.frames_.empty() ? v.edited_.render.frame : v.frames_.first;
+      r.last = v.frames_.empty() ? v.edited_.render.frame : v.frames_.last;
+      r.spp = o.afterSpp > 0 ? o.afterSpp : v.edited_.render.spp;
+      r.pattern = o.renderSequencePattern;
+      r.exposure = v.display_.exposure;
+      r.autoExposure = v.display_.autoExposure;
+      r.threads = o.threads;
+      if (!v.startSequenceRender(r)) v.exitCode_ = 1;
+      return;
+    }
+    if (v.sequenceRunning_) return;
   }
   if (o.quit && (o.screenshotPath.empty() || screenshotDone_) && !v.canvasCaptureRequest_) v.quitNow_ = true;
 }

@@ -320,6 +320,35 @@ void Viewer::beginLatency(uint64_t request) {
   }
 }
 
+bool Viewer::startSequenceRender(const SequenceRenderRequest& request) {
+  try {
+    sequenceJob_.start(request);
+  } catch (const std::exception& e) {
+    report(std::string("render sequence: ") + e.what());
+    return false;
+  }
+  sequenceRunning_ = true;
+  // The cores go to the sequence; the live render resumes when it ends.
+  pausedForSequence_ = !paused_;
+  if (pausedForSequence_) paused_ = true, session_.setPaused(true);
+  report("rendering frames " + std::to_string(request.first) + "-" + std::to_string(request.last) + " to " + request.pattern);
+  return true;
+}
+
+void Viewer::pollSequenceRender() {
+  if (!sequenceRunning_) return;
+  const SequenceProgress p = sequenceJob_.progress();
+  busyFrames_ = std::max(busyFrames_, 1);  // the progress bar moves
+  if (p.running) return;
+  sequenceRunning_ = false;
+  if (pausedForSequence_) paused_ = false, session_.setPaused(false), pausedForSequence_ = false;
+  std::string text = "render sequence: " + std::string(p.cancelled ? "cancelled; " : "") + "wrote " + std::to_string(p.written.size()) +
+                     " of " + std::to_string(p.total) + " frames";
+  if (!p.written.empty()) text += " (last " + p.written.back() + ")";
+  report(text);
+  for (const auto& f : p.failed) report("render sequence: could not render " + f);
+}
+
 void Viewer::togglePause() {
   if (compare_) return;  // equal time: the panes run together or not at all
   paused_ = !paused_;
@@ -704,6 +733,7 @@ int Viewer::run() {
       pollSceneFile();
       pollDrops();
       pollTimeline();
+      pollSequenceRender();
     } catch (const std::exception& e) {
       report(e.what());
     }

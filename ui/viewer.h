@@ -61,6 +61,9 @@ struct ViewerOptions {
   // File > Open image, scripted: once the first image shows, this EXR becomes a snapshot compared
   // with the live render (in the comparison: the panes' reference).
   std::string openImagePath;
+  // File > Render sequence, scripted: the timeline's frames (or the one shown) at --after-spp (else
+  // the scene's spp) to this pattern, once the first image shows; quits when it ends with --quit.
+  std::string renderSequencePattern;
 };
 
 // Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.

@@ -18,6 +18,7 @@
 #include "render_session.h"
 #include "scripted_driver.h"
 #include "sequence.h"
+#include "sequence_render.h"
 #include "snapshot_store.h"
 #include "vdb_import.h"
 #include "view_settings.h"
@@ -287,6 +288,15 @@ class Viewer {
   int busyFrames_ = 3;
   int exitCode_ = 0;
   bool paused_ = false;  // P: the render holds its samples until resumed
+  // File > Render sequence: the job, its dialog's fields, and whether the live render was paused for it.
+  SequenceRenderJob sequenceJob_{/*yieldToUi=*/true};
+  bool sequenceRunning_ = false, pausedForSequence_ = false, showRenderSequence_ = false;
+  int sequenceFirst_ = 1, sequenceLast_ = 1, sequenceSpp_ = 64;
+  float sequenceSeconds_ = 0.0f;
+  std::string sequencePattern_;
+  bool startSequenceRender(const SequenceRenderRequest& request);
+  void pollSequenceRender();
+  void drawSequenceProgress();
   bool clippingView_ = false;  // H: red where the display clips at white, blue at black
   DisplayHistogram histogram_;
   uint64_t histogramVersion_ = 0;

@@ -16,6 +16,14 @@ void Viewer::drawMenuBar() {
     if (ImGui::MenuItem("Open image (EXR)...", "Ctrl+I")) showOpenImage_ = true;
     if (ImGui::MenuItem("Save", "Ctrl+S", false, single)) requestSave();
     if (ImGui::MenuItem("Save As...", "Ctrl+Shift+S", false, single)) showSaveAs_ = true;
+    if (ImGui::MenuItem("Render sequence to disk...", nullptr, false, single && !sequenceRunning_)) {
+      showRenderSequence_ = true;
+      sequenceFirst_ = frames_.empty() ? edited_.render.frame : frames_.first;
+      sequenceLast_ = frames_.empty() ? edited_.render.frame : frames_.last;
+      sequenceSpp_ = edited_.render.spp;
+      const std::string stem = fs::path(documentPath_.empty() ? scenePath_ : documentPath_).stem().string();
+      if (sequencePattern_.empty()) sequencePattern_ = (fs::path("renders") / (stem + ".####.exr")).string();
+    }
     if (ImGui::MenuItem("Reload scene", nullptr, false, !scenePath_.empty()))
       confirmDiscard("reload", [this] { openScene(scenePath_, sceneSettings_, scenePreset_); });
     ImGui::Separator();
@@ -146,6 +154,40 @@ void Viewer::drawDialogs() {
     ImGui::SameLine();
     if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) done = true;
     if (done) ImGui::CloseCurrentPopup();
+    ImGui::EndPopup();
+  }
+
+  // --- Render sequence ---
+  if (showRenderSequence_) {
+    showRenderSequence_ = false;
+    ImGui::OpenPopup("Render sequence to disk");
+  }
+  ImGui::SetNextWindowSize(ImVec2(640, 0), ImGuiCond_Appearing);
+  if (ImGui::BeginPopupModal("Render sequence to disk")) {
+    ImGui::InputInt("first frame", &sequenceFirst_);
+    ImGui::InputInt("last frame", &sequenceLast_);
+    ImGui::InputInt("samples per pixel", &sequenceSpp_);
+    ImGui::InputFloat("or seconds per frame (0: use spp)", &sequenceSeconds_);
+    ImGui::InputText("output", &sequencePattern_);
+    ImGui::TextDisabled("#### is the frame number; .exr keeps the scene-linear image, .png the display at this exposure.");
+    ImGui::TextDisabled("The live render pauses while the sequence renders; the timeline shows its progress.");
+    bool close = false;
+    if (ImGui::Button("Render")) {
+      SequenceRenderRequest r;
+      r.scene = edited_;
+      r.scene.display = display_;
+      r.first = sequenceFirst_, r.last = sequenceLast_;
+      r.spp = std::max(0, sequenceSpp_);
+      r.seconds = std::max(0.0f, sequenceSeconds_);
+      r.pattern = sequencePattern_;
+      r.exposure = display_.exposure;
+      r.autoExposure = display_.autoExposure;
+      r.threads = options_.threads;
+      close = startSequenceRender(r);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) close = true;
+    if (close) ImGui::CloseCurrentPopup();
     ImGui::EndPopup();
   }
 

@@ -403,6 +403,18 @@ void Viewer::drawPanel() {
   if (changed) submitEdit("panel");
 }
 
+// The sequence being rendered to disk: which frame, how far, and a Cancel button.
+void Viewer::drawSequenceProgress() {
+  if (!sequenceRunning_) return;
+  const SequenceProgress p = sequenceJob_.progress();
+  char label[128];
+  std::snprintf(label, sizeof(label), "rendering frame %d (%d of %d done) %.0f%%", p.frame, p.done, p.total, 100.0 * p.fraction());
+  ImGui::ProgressBar(static_cast<float>(p.fraction()), ImVec2(320.0f, 0.0f), label);
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Cancel sequence")) sequenceJob_.cancel();
+  ImGui::SameLine();
+}
+
 void Viewer::drawStatusBar() {
   int ww, wh;
   glfwGetWindowSize(window_, &ww, &wh);
@@ -415,6 +427,7 @@ void Viewer::drawStatusBar() {
                    ImGuiWindowFlags_NoSavedSettings);
   double fps = 0.0;
   if (frameTimes_.size() > 1) fps = (frameTimes_.size() - 1) / (frameTimes_.back() - frameTimes_.front());
+  if (frames_.empty()) drawSequenceProgress();  // a sequence shows it in the timeline
   if (frame_) {
     const Film& film = frame_->film;
     char latency[32] = "-";
@@ -722,6 +735,7 @@ void Viewer::drawTimeline() {
   ImGui::Begin("Timeline", nullptr,
                ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoScrollbar |
                    ImGuiWindowFlags_NoSavedSettings);
+  drawSequenceProgress();
   if (ImGui::Button("|<")) setFrame(frames_.first);
   ImGui::SameLine();
   if (ImGui::Button("<")) setFrame(neighbourFrame(-1));
