@@ -66,6 +66,9 @@ int main(int argc, char** argv) {
   app.add_option("--render-sequence", o.renderSequencePattern,
                  "Scripted: File > Render sequence once the first image shows: the timeline's frames at --after-spp (else the scene's "
                  "spp) to this pattern (OUT.####.exr or .png)");
+  app.add_option("--region", o.region, "Scripted: a render region X,Y,W,H (pixels) once the first image shows (Ctrl+drag does it live)")
+      ->delimiter(',')
+      ->expected(4);
   std::string panes;
   app.add_option("--panes", panes, "Equal-time comparison: comma-separated strategy presets, one pane each (1 to 4)");
   app.add_option("--equal-time", o.equalTime, "Stop every pane after this many seconds of rendering")->check(candela::finitePositive());

@@ -18,12 +18,20 @@ Camera::Camera(const CameraDesc& d) : width_(d.resolution.first), height_(d.reso
   up_ = glm::cross(right_, forward_);
   tanHalf_ = std::tan(glm::radians(d.fov_y) * 0.5f);
   aspect_ = static_cast<float>(width_) / static_cast<float>(height_);
+  fullWidth_ = static_cast<float>(width_), fullHeight_ = static_cast<float>(height_);
 }
 
 Ray Camera::generate(float x, float y) const {
-  const float sx = (2.0f * x / static_cast<float>(width_) - 1.0f) * tanHalf_ * aspect_;
-  const float sy = (1.0f - 2.0f * y / static_cast<float>(height_)) * tanHalf_;
+  const float sx = (2.0f * (x + offsetX_) / fullWidth_ - 1.0f) * tanHalf_ * aspect_;
+  const float sy = (1.0f - 2.0f * (y + offsetY_) / fullHeight_) * tanHalf_;
   return Ray{origin_, glm::normalize(forward_ + sx * right_ + sy * up_)};
+}
+
+Camera Camera::window(int x0, int y0, int w, int h) const {
+  Camera c = *this;
+  c.offsetX_ = offsetX_ + static_cast<float>(x0), c.offsetY_ = offsetY_ + static_cast<float>(y0);
+  c.width_ = w, c.height_ = h;
+  return c;
 }
 
 Scene::Scene(const SceneDesc& desc) : desc_(desc), camera_(desc.camera) {}

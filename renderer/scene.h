@@ -27,11 +27,16 @@ class Camera {
   int height() const { return height_; }
   // A ray through image position (x, y) in pixels; (0, 0) is the top-left corner.
   Ray generate(float x, float y) const;
+  // The w x h window of this camera's image at pixel (x0, y0): its pixel (x, y) sees what this
+  // camera's pixel (x0 + x, y0 + y) sees (a render region).
+  Camera window(int x0, int y0, int w, int h) const;
 
  private:
   Vec3 origin_, forward_, right_, up_;
   float tanHalf_ = 0.0f, aspect_ = 1.0f;
   int width_ = 0, height_ = 0;
+  float offsetX_ = 0.0f, offsetY_ = 0.0f;  // a window's corner in the whole image
+  float fullWidth_ = 0.0f, fullHeight_ = 0.0f;
 };
 
 // Loads the grids `desc` will need (at its render.frame) into the loader's cache: a later

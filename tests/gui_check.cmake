@@ -406,6 +406,17 @@ elseif(MODE STREQUAL "comparison")
       message(FATAL_ERROR "pane ${pane} is shown at exposure ${exposure}: the comparison opened dark")
     endif()
   endforeach()
+elseif(MODE STREQUAL "region")
+  # A render region: only its pixels refine (to --after-spp), the rest of the image holds.
+  run_checked(${XVFB} ${VIEWER} ${SCENE} --set camera.resolution=[160,90] --region 60,10,40,50 --screenshot ${OUT}/region.png
+              --after-spp 32 --quit)
+  expect_contains("${LAST_OUTPUT}" "render region 40x50 at (60, 10)")
+  metadata(${OUT}/region.png region region)
+  metadata(${OUT}/region.png region_spp region_spp)
+  metadata(${OUT}/region.png spp spp)
+  if(NOT region STREQUAL "60,10,40,50" OR NOT region_spp EQUAL 32 OR NOT spp LESS 32)
+    message(FATAL_ERROR "region ${region} at ${region_spp} spp, the rest at ${spp}: expected 60,10,40,50 at 32, the rest fewer")
+  endif()
 elseif(MODE STREQUAL "save")
   # Edit, save as, reopen: the reopened scene renders the same samples as the edited one.
   run_checked(${XVFB} ${VIEWER} ${SCENE} --strategy emission --set camera.resolution=[160,90] --edit volumes.1.g=0.3

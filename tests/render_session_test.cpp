@@ -75,6 +75,40 @@ TEST(RenderSession, PauseHoldsTheSamplesAndResumeGoesOn) {
   EXPECT_EQ(done->film.meanImage(), test::render(desc, done->film.spp()).meanImage());
 }
 
+// A render region: only its pixels refine, in a film of their own, while the rest of the image
+// holds; its pixels see what the whole image's pixels at the same place see (the camera's window);
+// cleared, the whole image refines again from where it was.
+TEST(RenderSession, ARenderRegionRefinesOnlyItsPixels) {
+  const SceneDesc desc = smallScene("assets/scenes/test/slab.json");
+  const Camera whole(desc.camera);
+  const Camera window = whole.window(10, 6, 20, 12);
+  EXPECT_EQ(window.width(), 20);
+  const Ray a = window.generate(3.25f, 4.5f), b = whole.generate(13.25f, 10.5f);
+  EXPECT_EQ(a.direction, b.direction);
+  EXPECT_EQ(a.origin, b.origin);
+
+  RenderSession session;
+  session.setLimits(ProgressLimits{2, 0.0f});
+  session.open(desc);
+  ASSERT_TRUE(waitFor(session, [](const Frame& f) { return f.finished && f.film.spp() == 2; }));
+  session.setRegion(RegionRect{10, 6, 20, 12});
+  session.setLimits(ProgressLimits{16, 0.0f});
+  auto f = waitFor(session, [](const Frame& f) { return f.finished && f.region && f.regionFilm.spp() == 16; });
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->regionFilm.width(), 20);
+  EXPECT_EQ(f->regionFilm.height(), 12);
+  EXPECT_EQ(f->film.spp(), 2) << "the rest of the image holds";
+  // Shown: the region's pixels inside it, the image's outside.
+  const std::vector<float> shown = f->shownImage(), inside = f->regionFilm.meanImage(), outside = f->film.meanImage();
+  const auto at = [&](const std::vector<float>& v, int x, int y, int w) { return v[3 * (static_cast<size_t>(y) * w + x)]; };
+  EXPECT_EQ(at(shown, 12, 7, 48), at(inside, 2, 1, 20));
+  EXPECT_EQ(at(shown, 2, 2, 48), at(outside, 2, 2, 48));
+  // Cleared: the whole image goes on to the limit.
+  session.setRegion(std::nullopt);
+  auto all = waitFor(session, [](const Frame& f) { return f.finished && !f.region && f.film.spp() == 16; });
+  ASSERT_TRUE(all);
+}
+
 TEST(RenderSession, EditRestartsWithAPreviewThenRefines) {
   // Every published frame, in order (the notification runs on the worker right after publishing).
   // Declared before the session: its worker may still notify until the session is destroyed.

@@ -110,6 +110,27 @@ void RenderSession::message(const std::string& text) {
   messages_.push_back(text);
 }
 
+std::vector<float> Frame::shownImage() const {
+  std::vector<float> image = film.meanImage();
+  if (!region || regionFilm.spp() == 0 || film.width() != width || film.height() != height) return image;
+  const std::vector<float> inside = regionFilm.meanImage();
+  for (int y = 0; y < regionFilm.height(); ++y)
+    std::copy_n(inside.begin() + 3 * static_cast<size_t>(y) * regionFilm.width(), 3 * static_cast<size_t>(regionFilm.width()),
+                image.begin() + 3 * (static_cast<size_t>(region->y + y) * width + region->x));
+  return image;
+}
+
+void RenderSession::setRegion(std::optional<RegionRect> region) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (region && (region->w <= 0 || region->h <= 0)) region.reset();
+    region_ = region;
+    regionChanged_ = true;
+  }
+  cancelPass_ = true;
+  workerWake_.notify_one();
+}
+
 void RenderSession::setPaused(bool paused) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -217,9 +238,15 @@ void RenderSession::workerLoop() {
   bool finishedPublished = false;
   double rate = 5e5;  // camera samples per second, measured; sizes the preview pass
 
+  std::optional<RegionRect> region;  // the render region, clamped to the image (regionFilm: its samples)
+  std::optional<RegionRect> regionAsked;
+  Film regionFilm;
+  double regionSeconds = 0.0;
   std::shared_ptr<const Film> usedPilot;  // the auto pilot's film a restart last started from
   auto restart = [&] {
     film = Film();
+    regionFilm = Film();
+    regionSeconds = 0.0;
     seconds = 0.0;
     passSpp = 1;
     needPreview = true;
@@ -245,6 +272,8 @@ void RenderSession::workerLoop() {
     frame->sceneCenter = scene->center();
     frame->sceneRadius = scene->radius();
     frame->sceneMin = scene->boundsMin(), frame->sceneMax = scene->boundsMax();
+    frame->region = region;
+    if (region) frame->regionFilm = regionFilm;
     return frame;
   };
 
@@ -254,10 +283,12 @@ void RenderSession::workerLoop() {
     {
       std::unique_lock<std::mutex> lock(mutex_);
       auto finished = [&] {
-        return (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
+        const bool inRegion = region && film.spp() > 0;
+        const Film& refining = inRegion ? regionFilm : film;
+        return (limits.spp > 0 && refining.spp() >= limits.spp) || (limits.time_s > 0.0f && (inRegion ? regionSeconds : seconds) >= limits.time_s);
       };
       workerWake_.wait(lock, [&] {
-        return stop_ || builtScene_ || limitsChanged_ || (target_ && target_->request > seenTarget) ||
+        return stop_ || builtScene_ || limitsChanged_ || regionChanged_ || (target_ && target_->request > seenTarget) ||
                (scene && !finished() && !loading_ && !paused_);
       });
       if (stop_) return;
@@ -268,6 +299,13 @@ void RenderSession::workerLoop() {
       }
       if (target_ && target_->request > shownRequest) target = target_;
       if (target_) seenTarget = std::max(seenTarget, target_->request);
+      if (regionChanged_) {
+        regionAsked = region_;
+        regionChanged_ = false;
+        regionFilm = Film();
+        regionSeconds = 0.0;
+        finishedPublished = false;
+      }
       if (limitsChanged_) {
         const bool lowered = (limits_.spp > 0 && (limits.spp == 0 || limits_.spp < limits.spp));
         limits = limits_;
@@ -307,8 +345,26 @@ void RenderSession::workerLoop() {
     }
 
     if (paused_) continue;  // the edits are applied; their image comes on resume
-    const bool done = (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
-    if (done) {
+    // The film that refines: the render region's once the image has had a first pass (so that the
+    // rest of it shows), else the whole image's.
+    region.reset();
+    if (regionAsked) {
+      const int W = scene->camera().width(), H = scene->camera().height();
+      RegionRect r;
+      r.x = std::clamp(regionAsked->x, 0, W - 1), r.y = std::clamp(regionAsked->y, 0, H - 1);
+      r.w = std::clamp(regionAsked->w, 1, W - r.x), r.h = std::clamp(regionAsked->h, 1, H - r.y);
+      if (regionFilm.spp() > 0 && !(regionFilm.width() == r.w && regionFilm.height() == r.h)) regionFilm = Film(), regionSeconds = 0.0;
+      region = r;
+    }
+    const bool inRegion = region && film.spp() > 0;
+    std::optional<Camera> regionCamera;
+    if (inRegion) regionCamera = scene->camera().window(region->x, region->y, region->w, region->h);
+    Film& refining = inRegion ? regionFilm : film;
+    double& refiningSeconds = inRegion ? regionSeconds : seconds;
+    auto reached = [&] {
+      return (limits.spp > 0 && refining.spp() >= limits.spp) || (limits.time_s > 0.0f && refiningSeconds >= limits.time_s);
+    };
+    if (reached()) {
       if (!finishedPublished) {
         auto frame = makeFrame();
         frame->film = film;
@@ -344,11 +400,11 @@ void RenderSession::workerLoop() {
       continue;
     }
     int spp = passSpp;
-    if (limits.spp > 0) spp = std::min(spp, limits.spp - film.spp());
-    if (!renderer->renderPass(film, spp, &cancelPass_)) continue;
+    if (limits.spp > 0) spp = std::min(spp, limits.spp - refining.spp());
+    if (!renderer->renderPass(refining, spp, &cancelPass_, inRegion ? &*regionCamera : nullptr)) continue;
     const double passSeconds = std::chrono::duration<double>(Clock::now() - start).count();
-    seconds += passSeconds;
-    rate = spp * double(film.width()) * film.height() / std::max(1e-4, passSeconds);
+    refiningSeconds += passSeconds;
+    rate = spp * double(refining.width()) * refining.height() / std::max(1e-4, passSeconds);
     // Aim for passes of about a tenth of a second: frequent updates, little per-pass overhead.
     if (passSeconds < 0.05) passSpp = std::min(passSpp * 2, 256);
     else if (passSeconds > 0.25 && passSpp > 1) passSpp /= 2;
@@ -356,7 +412,7 @@ void RenderSession::workerLoop() {
     auto frame = makeFrame();
     frame->film = film;
     frame->samplesPerSecond = seconds > 0.0 ? film.spp() * double(film.width()) * film.height() / seconds : 0.0;
-    frame->finished = (limits.spp > 0 && film.spp() >= limits.spp) || (limits.time_s > 0.0f && seconds >= limits.time_s);
+    frame->finished = reached();
     finishedPublished = frame->finished;
     publish(frame);
   }

@@ -28,6 +28,12 @@ namespace candela {
 
 // One published image. `request` is the id of the newest request it reflects, so the UI can time
 // edit-to-first-image.
+// A rectangle of the image in pixels, (x, y) its top-left corner.
+struct RegionRect {
+  int x = 0, y = 0, w = 0, h = 0;
+  bool operator==(const RegionRect& o) const { return x == o.x && y == o.y && w == o.w && h == o.h; }
+};
+
 struct Frame {
   uint64_t version = 0;
   uint64_t request = 0;
@@ -45,6 +51,12 @@ struct Frame {
   Vec3 sceneCenter{0.0f};   // bounds of the scene's content, for framing the camera
   float sceneRadius = 1.0f;
   Vec3 sceneMin{1.0f}, sceneMax{-1.0f};  // the box of the volumes and bounded surfaces (empty when min > max)
+  // A render region: only its pixels refine, in `regionFilm` (region-sized, its own samples); `film`
+  // holds the rest of the image as it was when the region was set. regionFilm.spp() is 0 without one.
+  std::optional<RegionRect> region;
+  Film regionFilm;
+  // The mean image shown: film's, with the region's pixels from regionFilm once it has samples.
+  std::vector<float> shownImage() const;
 };
 
 class RenderSession {
@@ -66,6 +78,10 @@ class RenderSession {
   // Paused: the pass in flight stops and no other starts; the samples so far stay shown. Edits still
   // apply (rebuilds included), and their images come on resume.
   void setPaused(bool paused);
+  // A render region (clamped to the image; nullopt or an empty rectangle clears it): from the next
+  // pass only its pixels refine, from their own first sample, and the progress limits apply to them.
+  // Cleared, the whole image refines again from where it was.
+  void setRegion(std::optional<RegionRect> region);
   bool paused() const { return paused_.load(); }
   // Called on the worker or loader thread whenever a frame or message is published (the viewer wakes
   // its event loop with it). Set before the first request.
@@ -121,6 +137,8 @@ class RenderSession {
   bool limitsChanged_ = false;
   std::atomic<bool> cancelPass_{false};
   std::atomic<bool> paused_{false};
+  std::optional<RegionRect> region_;  // guarded by mutex_
+  bool regionChanged_ = false;
 
   // Loader state.
   std::optional<Target> buildRequest_;

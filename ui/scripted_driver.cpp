@@ -178,6 +178,11 @@ void ScriptedDriver::step(Viewer& v) {
       std::fflush(stdout);
     }
   }
+  if (o.region.size() == 4 && !regionSet_) {
+    regionSet_ = true;
+    v.setRegion(RegionRect{o.region[0], o.region[1], o.region[2], o.region[3]});
+    return;
+  }
   if (!o.openImagePath.empty() && !imageOpened_) {
     imageOpened_ = true;
     if (!v.openImage(o.openImagePath, false)) v.exitCode_ = 1;
@@ -239,7 +244,9 @@ void ScriptedDriver::step(Viewer& v) {
   }
   if (!o.screenshotPath.empty() && !screenshotDone_) {
     // The image of the newest edit (not the last one before it) at the budget asked for.
-    const bool ready = v.latencyRequest_ == 0 && ((o.afterSpp > 0 && v.frame_->film.spp() >= o.afterSpp) || (o.afterSeconds > 0.0 && v.frame_->seconds >= o.afterSeconds) ||
+    // With a render region, its samples are the ones that count.
+    const int spp = v.frame_->region ? v.frame_->regionFilm.spp() : v.frame_->film.spp();
+    const bool ready = v.latencyRequest_ == 0 && ((o.afterSpp > 0 && spp >= o.afterSpp) || (o.afterSeconds > 0.0 && v.frame_->seconds >= o.afterSeconds) ||
                        (o.afterSpp <= 0 && o.afterSeconds <= 0.0));
     if (!ready) return;
     screenshotDone_ = true;

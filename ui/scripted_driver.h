@@ -29,7 +29,7 @@ class ScriptedDriver {
   void measureLatency(Viewer& v);
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   bool dropped_ = false;
-  bool imageOpened_ = false, sequenceStarted_ = false;
+  bool imageOpened_ = false, sequenceStarted_ = false, regionSet_ = false;
   bool snapshotDone_ = false, editsDone_ = false, historyDone_ = false, saveDone_ = false, screenshotDone_ = false;
   int framesStepped_ = 0;
   bool frameRequested_ = false;

@@ -349,6 +349,16 @@ void Viewer::pollSequenceRender() {
   for (const auto& f : p.failed) report("render sequence: could not render " + f);
 }
 
+void Viewer::setRegion(std::optional<RegionRect> region) {
+  region_ = region;
+  session_.setRegion(region);
+  if (region)
+    report("render region " + std::to_string(region->w) + "x" + std::to_string(region->h) + " at (" + std::to_string(region->x) + ", " +
+           std::to_string(region->y) + "): only it refines (Esc clears it)");
+  else
+    report("render region cleared: the whole image refines");
+}
+
 void Viewer::togglePause() {
   if (compare_) return;  // equal time: the panes run together or not at all
   paused_ = !paused_;
@@ -411,7 +421,7 @@ void Viewer::pollSession() {
   if (latest && latest->version != uploadedVersion_) {
     frame_ = latest;
     uploadedVersion_ = latest->version;
-    gl_->uploadImage(latest->film.width(), latest->film.height(), latest->film.meanImage());
+    gl_->uploadImage(latest->film.width(), latest->film.height(), latest->shownImage());
     outputDirty_ = true;
     if (!haveScene_ && latest->scene) edited_ = *latest->scene, fileScene_ = edited_, haveScene_ = true;
     const bool full = !latest->preview && latest->film.spp() > 0;
@@ -439,8 +449,9 @@ void Viewer::pollSession() {
   // it; checked on the image shown rather than on a new one, since a render that reached its limit
   // while another file loaded (and failed) sends none. An exposure the artist set clears
   // autoExposure (setDisplay).
-  if (display_.autoExposure && frame_ && !frame_->preview && frame_->film.spp() >= 4 && !pendingOpen_ && frame_->request >= openedRequest_)
-    chooseExposure(frame_->film.meanImage());
+  if (display_.autoExposure && frame_ && !frame_->preview && std::max(frame_->film.spp(), frame_->regionFilm.spp()) >= 4 && !pendingOpen_ &&
+      frame_->request >= openedRequest_)
+    chooseExposure(frame_->shownImage());
 }
 
 void Viewer::chooseExposure(const std::vector<float>& rgb) {
@@ -568,11 +579,37 @@ void Viewer::handleCamera() {
   if (canvas_.handleMouse()) return;
   const ImageCanvas::Rect r = canvas_.rect();
   const bool over = !io.WantCaptureMouse && r.contains(io.MousePos);
-  // Ctrl+click inspects the pixel's distance densities (guide_inspector_view.h) instead of tumbling.
-  if (io.KeyCtrl && dragButton_ < 0 && over && io.MouseClicked[0] && frame_) {
-    const ImVec2 uv = canvas_.imageUv(canvas_.paneRect(canvas_.paneAt(io.MousePos)), io.MousePos);
-    inspector_.request(edited_, static_cast<int>(uv.x * edited_.camera.resolution.first),
-                       static_cast<int>(uv.y * edited_.camera.resolution.second));
+  // Ctrl+drag draws a render region; Ctrl+click inspects the pixel's distance densities
+  // (guide_inspector_view.h). Neither tumbles.
+  if (io.KeyCtrl && dragButton_ < 0 && over && io.MouseClicked[0] && frame_ && !compare_) {
+    regionDragStart_ = io.MousePos;
+    regionDragging_ = true;
+    return;
+  }
+  if (regionDragging_) {
+    const ImVec2 a = regionDragStart_, b = io.MousePos;
+    const bool moved = std::abs(b.x - a.x) > 4.0f || std::abs(b.y - a.y) > 4.0f;
+    const ImageCanvas::Rect pane = canvas_.paneRect(0);
+    auto pixel = [&](ImVec2 p) {
+      const ImVec2 uv = canvas_.imageUv(pane, p);
+      return ImVec2(std::clamp(uv.x, 0.0f, 1.0f) * static_cast<float>(edited_.camera.resolution.first),
+                    std::clamp(uv.y, 0.0f, 1.0f) * static_cast<float>(edited_.camera.resolution.second));
+    };
+    if (moved) {
+      ImDrawList* draw = ImGui::GetForegroundDrawList();
+      draw->AddRect(ImVec2(std::min(a.x, b.x), std::min(a.y, b.y)), ImVec2(std::max(a.x, b.x), std::max(a.y, b.y)), IM_COL32(255, 200, 60, 255), 0.0f, 0, 1.5f);
+    }
+    if (!io.MouseDown[0]) {
+      regionDragging_ = false;
+      if (moved) {
+        const ImVec2 p0 = pixel(ImVec2(std::min(a.x, b.x), std::min(a.y, b.y))), p1 = pixel(ImVec2(std::max(a.x, b.x), std::max(a.y, b.y)));
+        setRegion(RegionRect{static_cast<int>(p0.x), static_cast<int>(p0.y), std::max(1, static_cast<int>(std::ceil(p1.x - p0.x))),
+                             std::max(1, static_cast<int>(std::ceil(p1.y - p0.y)))});
+      } else {
+        const ImVec2 p = pixel(a);
+        inspector_.request(edited_, static_cast<int>(p.x), static_cast<int>(p.y));
+      }
+    }
     return;
   }
   // Start a drag only on the image and only when ImGui does not want the mouse.

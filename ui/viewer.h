@@ -64,6 +64,8 @@ struct ViewerOptions {
   // File > Render sequence, scripted: the timeline's frames (or the one shown) at --after-spp (else
   // the scene's spp) to this pattern, once the first image shows; quits when it ends with --quit.
   std::string renderSequencePattern;
+  // A render region, scripted (x, y, width, height in pixels), set once the first image shows.
+  std::vector<int> region;
 };
 
 // Runs the viewer until the window closes (or a scripted --quit). Returns the process exit code.

@@ -303,6 +303,11 @@ class Viewer {
   ViewerClock::time_point histogramTime_;
   void drawHistogram();
   void togglePause();
+  // The render region (Ctrl+drag on the image; Esc clears it): only its pixels refine.
+  std::optional<RegionRect> region_;
+  bool regionDragging_ = false;
+  ImVec2 regionDragStart_;
+  void setRegion(std::optional<RegionRect> region);
 };
 
 }  // namespace candela

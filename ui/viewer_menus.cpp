@@ -43,6 +43,7 @@ void Viewer::drawMenuBar() {
     if (ImGui::MenuItem("Frame volume", "F", false, haveScene_)) frameVolume();
     if (ImGui::MenuItem("Reset camera", "R / Home", false, haveScene_)) resetCamera();
     if (ImGui::MenuItem("Lock pixel readout", "L", canvas_.readoutLocked())) toggleReadoutLock();
+    if (ImGui::MenuItem("Clear render region", "Esc", false, region_.has_value())) setRegion(std::nullopt);
     if (ImGui::MenuItem("Clipping view", "H", clippingView_)) clippingView_ = !clippingView_, applyDisplay();
     if (ImGui::MenuItem("Fit image", "0", !canvas_.oneToOne())) canvas_.resetZoom();
     if (ImGui::MenuItem("Actual pixels (1:1)", "1", canvas_.oneToOne())) canvas_.setOneToOne(true);
@@ -84,7 +85,7 @@ void Viewer::drawMenuBar() {
     ImGui::TextDisabled("Open: File > Open, Ctrl+O, or drop a scene (.json) or volume (.vdb) on the window");
     ImGui::TextDisabled("Mouse on the image: left tumble, middle track, right dolly, wheel dolly (Alt optional)");
     ImGui::TextDisabled("Image: Ctrl+wheel zoom, Shift+left drag pan, 0 fit, 1 actual pixels (all panes together)");
-    ImGui::TextDisabled("Ctrl+click a pixel: guide inspector (distance densities along its ray)");
+    ImGui::TextDisabled("Ctrl+click a pixel: guide inspector (distance densities along its ray); Ctrl+drag: render region, Esc clears it");
     ImGui::TextDisabled("Keys: F frame volume, R reset camera, L lock readout, C channel, E/Shift+E exposure, S screenshot, P pause");
     ImGui::TextDisabled("Ctrl+Z undo, Ctrl+Shift+Z redo, Ctrl+S save, K snapshot, Shift+K snapshots, Left/Right frame, Space play");
     ImGui::EndMenu();
@@ -334,6 +335,9 @@ void Viewer::handleKeys() {
       case GLFW_KEY_0: canvas_.resetZoom(); break;
       case GLFW_KEY_1: canvas_.setOneToOne(true); break;
       case GLFW_KEY_P: togglePause(); break;
+      case GLFW_KEY_ESCAPE:
+        if (region_) setRegion(std::nullopt);
+        break;
       case GLFW_KEY_H:
         clippingView_ = !clippingView_;
         applyDisplay();

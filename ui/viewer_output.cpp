@@ -158,6 +158,11 @@ bool Viewer::screenshot(const std::string& requestedPath) {
     meta["spp"] = std::to_string(frame_->preview ? 0 : frame_->film.spp());
     meta["time_s"] = std::to_string(frame_->seconds);
     meta["rejected_samples"] = std::to_string(frame_->film.rejectedSamples());
+    if (frame_->region && frame_->regionFilm.spp() > 0) {
+      meta["region"] = std::to_string(frame_->region->x) + "," + std::to_string(frame_->region->y) + "," +
+                       std::to_string(frame_->region->w) + "," + std::to_string(frame_->region->h);
+      meta["region_spp"] = std::to_string(frame_->regionFilm.spp());
+    }
     DisplayImage png;
     png.width = gl_->outputWidth();
     png.height = gl_->outputHeight();
@@ -166,6 +171,8 @@ bool Viewer::screenshot(const std::string& requestedPath) {
     writeDisplayPng(pngPath, png);
     Image exr;
     exr = frame_->film.image();  // with the variance and spp layers
+    // As shown: the region's pixels from its own film (the layers stay the rest of the image's).
+    if (frame_->region && frame_->regionFilm.spp() > 0) exr.rgb = frame_->shownImage();
     exr.metadata = meta;
     writeExr(exrPath, exr);
     report("screenshot: wrote " + pngPath + " and " + exrPath);

@@ -18,6 +18,24 @@ namespace fs = std::filesystem;
 
 // Each pane's label over its image: strategy, spp, time it got, error and agreement.
 void Viewer::drawPaneLabels() {
+  if (region_ && frame_ && !compare_ && frame_->width > 0) {
+    // The render region's outline, through the zoom, with its samples.
+    const ImageCanvas::Rect r = canvas_.paneRect(0);
+    const ViewWindow& v = canvas_.view();
+    auto at = [&](float px, float py) {
+      const float u = px / static_cast<float>(frame_->width), w = py / static_cast<float>(frame_->height);
+      return ImVec2(r.x + (u - v.u0) / (v.u1 - v.u0) * r.w, r.y + (w - v.v0) / (v.v1 - v.v0) * r.h);
+    };
+    ImDrawList* draw = ImGui::GetForegroundDrawList();
+    const ImVec2 a = at(static_cast<float>(region_->x), static_cast<float>(region_->y));
+    const ImVec2 b = at(static_cast<float>(region_->x + region_->w), static_cast<float>(region_->y + region_->h));
+    draw->PushClipRect(ImVec2(r.x, r.y), ImVec2(r.x + r.w, r.y + r.h), true);
+    draw->AddRect(a, b, IM_COL32(255, 200, 60, 230), 0.0f, 0, 1.5f);
+    char label[64];
+    std::snprintf(label, sizeof(label), "region  %d spp", frame_->regionFilm.spp());
+    draw->AddText(ImVec2(a.x + 4.0f, a.y + 2.0f), IM_COL32(255, 200, 60, 255), label);
+    draw->PopClipRect();
+  }
   if (comparedSnapshot_ && frame_ && !compare_) {
     // Live render against a snapshot: which side is which.
     ImDrawList* draw = ImGui::GetForegroundDrawList();
