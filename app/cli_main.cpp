@@ -4,6 +4,7 @@
 //   candela-cli bench SCENE.json --strategies A,B --times T1,T2 [--reference REF.exr | --reference-spp N] -o DIR
 //                     [--sweep KEY=V1,V2,...]
 //   candela-cli generate TYPE -o OUT.vdb [--seed N] [--resolution N] [--size X,Y,Z] [--value V] [--temperature T]
+#include "atomic_file.h"
 #include "auto_strategy.h"
 #include "cli_checks.h"
 #include "convergence.h"
@@ -208,6 +209,10 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
       renderOne(frame, scenePath, path, threads, true, &exposure);
     } catch (const InputError& e) {
       std::fprintf(stderr, "\nerror: frame %d: %s (going on with the next frame)\n", f, e.what());
+      // A frame an earlier run wrote stays as it was (outputs are replaced only when complete), but it
+      // is not this run's: said, so that a full folder does not read as a finished run.
+      if (std::filesystem::exists(path))
+        std::fprintf(stderr, "error: frame %d: %s is from an earlier run, not this one\n", f, path.c_str());
       failed.push_back(f);
       continue;
     }
@@ -489,10 +494,11 @@ int bench(const std::string& scenePath, const std::string& strategiesText, const
   if (!sweepKey.empty()) {
     const std::string sweepCsv = (std::filesystem::path(outDir) / "sweep.csv").string();
     const std::string sweepSvg = (std::filesystem::path(outDir) / "sweep.svg").string();
-    std::ofstream out(sweepCsv);
+    std::ostringstream out;
     out << "# efficiency = 1 / (relmse x time_s) at the largest budget; " << kRelMseFormula << "\n";
     out << "strategy," << sweepKey << ",efficiency,note\n";
     for (const auto& p : sweepPoints) out << p.strategy << ',' << p.value << ',' << p.efficiency << ",\"" << p.note << "\"\n";
+    writeTextAtomically(sweepCsv, out.str());
     writeSweepSvg(sweepSvg, sweepPoints, std::filesystem::path(scenePath).stem().string() + ": efficiency versus " + sweepKey, sweepKey);
     std::printf("wrote %s and %s\n", sweepCsv.c_str(), sweepSvg.c_str());
   }

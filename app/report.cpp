@@ -1,5 +1,6 @@
 #include "report.h"
 
+#include "atomic_file.h"
 #include "convergence.h"
 #include "image_io.h"
 #include "renderer.h"
@@ -495,7 +496,7 @@ int runReport(bool quick, const std::string& dir, int threads, int seedCount, co
   fs::remove(tmp);
 
   const double total = std::chrono::duration<double>(Clock::now() - start).count();
-  std::ofstream page(fs::path(dir) / "index.html");
+  std::ostringstream page;
   page << "<!doctype html><html><head><meta charset=utf-8><title>Candela: speed versus accuracy</title><style>"
           "body{font-family:sans-serif;background:#1b1b1e;color:#ddd;margin:2em} table{border-collapse:collapse;margin:1em}"
           "td,th{border:1px solid #444;padding:3px 8px;font-size:13px} .row{display:flex;flex-wrap:wrap;align-items:flex-start}"
@@ -505,10 +506,11 @@ int runReport(bool quick, const std::string& dir, int threads, int seedCount, co
        << (stability ? "" : ", without the stability suite") << ", generated in " << std::fixed << std::setprecision(1) << total
        << " s on " << std::thread::hardware_concurrency() << " hardware threads."
        << (stability ? " Stability disagreements: " + std::to_string(disagreements) + "." : std::string()) << "</p>" << body.str() << "</body></html>\n";
+  writeTextAtomically((fs::path(dir) / "index.html").string(), page.str());
   // The README's headline is torch-in-mist's: a report without it leaves any earlier one alone.
   if (!headlineSvg.empty()) {
-    std::ofstream(fs::path(dir) / "headline.svg") << headlineSvg;
-    std::ofstream(fs::path(dir) / "headline.md") << headlineMd.str();
+    writeTextAtomically((fs::path(dir) / "headline.svg").string(), headlineSvg);
+    writeTextAtomically((fs::path(dir) / "headline.md").string(), headlineMd.str());
   }
   if (stability) std::printf("report: wrote %s/index.html in %.1f s (%d stability disagreements)\n", dir.c_str(), total, disagreements);
   else std::printf("report: wrote %s/index.html in %.1f s (%zu of %zu scenes, no stability suite)\n", dir.c_str(), total, scenes.size(), kReportScenes.size());

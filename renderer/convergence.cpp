@@ -1,5 +1,7 @@
 #include "convergence.h"
 
+#include "atomic_file.h"
+
 #include "procedural.h"
 #include "renderer.h"
 #include "rng.h"
@@ -53,11 +55,7 @@ void legendEntry(std::ostringstream& s, const ChartBox& c, int row, const char* 
     << "' stroke-width='3'/><text x='" << c.W - c.R + 46 << "' y='" << y + 4 << "'>" << label << "</text>\n";
 }
 
-void writeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write");
-  out << text;
-}
+void writeFile(const std::string& path, const std::string& text) { writeTextAtomically(path, text); }
 
 // The unbiased variance of one sample from a film entry's sum and sum of squares over n >= 2 samples.
 double sampleVariance(float sum, float sumSquares, int n) {
@@ -256,14 +254,14 @@ Image cachedReference(const SceneDesc& scene, const StrategySettings& strategy, 
 }
 
 void writeConvergenceCsv(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& comment) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write");
+  std::ostringstream out;
   out << "# " << kRelMseFormula << "\n";
   if (!comment.empty()) out << "# " << comment << "\n";
   out << "strategy,budget_s,time_s,spp,mse,relmse,rejected\n";
   for (const auto& p : points)
     out << p.strategy << ',' << p.budgetSeconds << ',' << p.seconds << ',' << p.spp << ',' << p.mse << ',' << p.relmse << ','
         << p.rejected << '\n';
+  writeTextAtomically(path, out.str());
 }
 
 void writeConvergenceSvg(const std::string& path, const std::vector<ConvergencePoint>& points, const std::string& title) {

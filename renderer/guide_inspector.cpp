@@ -1,5 +1,7 @@
 #include "guide_inspector.h"
 
+#include "atomic_file.h"
+
 #include "camera_guides.h"
 #include "integrator.h"
 #include "phase.h"
@@ -196,8 +198,7 @@ std::string inspectionSummary(const GuideInspection& r) {
 }
 
 void writeInspectionCsv(const std::string& path, const GuideInspection& r) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write");
+  std::ostringstream out;
   out << "# " << inspectionSummary(r) << "\n";
   out << "# ray origin " << r.ray.origin.x << " " << r.ray.origin.y << " " << r.ray.origin.z << ", direction " << r.ray.direction.x << " "
       << r.ray.direction.y << " " << r.ray.direction.z << "\n";
@@ -207,6 +208,7 @@ void writeInspectionCsv(const std::string& path, const GuideInspection& r) {
         << r.transmittance[i] << "," << r.sigmaS[i] << "," << r.inScattered[i] << "\n";
   out << "\nknot_t,knot_guided_pdf\n";
   for (const auto& k : r.knots) out << k.t << "," << k.value << "\n";
+  writeTextAtomically(path, out.str());
 }
 
 void writeInspectionSvg(const std::string& path, const GuideInspection& r, const std::string& title) {
@@ -257,9 +259,7 @@ void writeInspectionSvg(const std::string& path, const GuideInspection& r, const
   }
   s << "<text x='" << left << "' y='" << H - 8 << "' fill='#555'>V = int f^2/p / (int f)^2 (1 is perfect). " << r.note << "</text>\n";
   s << "</svg>\n";
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write");
-  out << s.str();
+  writeTextAtomically(path, s.str());
 }
 
 }  // namespace candela

@@ -1,5 +1,7 @@
 #include "image_io.h"
 
+#include "atomic_file.h"
+
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -24,7 +26,8 @@ float srgbEncode(float x) {
   return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
 }
 
-void writeExr(const std::string& path, const Image& image) {
+namespace {
+void writeExrFile(const std::string& path, const Image& image) {
   try {
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -49,6 +52,17 @@ void writeExr(const std::string& path, const Image& image) {
   } catch (const std::exception& e) {
     throw std::runtime_error(path + ": cannot write EXR (" + e.what() + ")");
   }
+}
+
+void writeDisplayPngFile(const std::string& path, const DisplayImage& image);
+}  // namespace
+
+void writeExr(const std::string& path, const Image& image) {
+  writeAtomically(path, [&](const std::string& temporary) { writeExrFile(temporary, image); });
+}
+
+void writeDisplayPng(const std::string& path, const DisplayImage& image) {
+  writeAtomically(path, [&](const std::string& temporary) { writeDisplayPngFile(temporary, image); });
 }
 
 Image readExr(const std::string& path) {
@@ -88,7 +102,8 @@ Image readExr(const std::string& path) {
   return image;
 }
 
-void writeDisplayPng(const std::string& path, const DisplayImage& image) {
+namespace {
+void writeDisplayPngFile(const std::string& path, const DisplayImage& image) {
   if (image.rgb8.size() != 3 * static_cast<size_t>(image.width) * static_cast<size_t>(image.height))
     throw std::runtime_error(path + ": PNG pixel buffer does not match its size");
   std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(path.c_str(), "wb"), &std::fclose);
@@ -120,7 +135,10 @@ void writeDisplayPng(const std::string& path, const DisplayImage& image) {
     png_write_row(png, const_cast<png_byte*>(image.rgb8.data() + 3 * static_cast<size_t>(y) * image.width));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
+  // libpng does not check fwrite: a full disk shows here.
+  if (std::fflush(fp.get()) != 0 || std::ferror(fp.get())) throw std::runtime_error(path + ": cannot write PNG (disk full?)");
 }
+}  // namespace
 
 DisplayImage readDisplayPng(const std::string& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(path.c_str(), "rb"), &std::fclose);

@@ -1,4 +1,5 @@
 #include "scene_desc.h"
+#include "atomic_file.h"
 #include "auto_strategy.h"
 
 #include <cerrno>
@@ -205,21 +206,10 @@ SceneDesc saveSceneDesc(const SceneDesc& scene, const std::string& path) {
     const fs::path relative = target.lexically_relative(newBase.lexically_normal());
     v.file = relative.empty() ? target.string() : relative.string();
   }
-  const fs::path tmp = fs::path(path + ".saving");
-  std::error_code dirError;
-  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path(), dirError);
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path + ": cannot write the scene file (" + std::string(std::strerror(errno)) + ")");
-    out << sceneToJson(saved).dump(2) << "\n";
-    out.flush();
-    if (!out) throw InputError(path + ": cannot write the scene file (disk full?)");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw InputError(path + ": cannot replace the scene file (" + ec.message() + ")");
+  try {
+    writeTextAtomically(path, sceneToJson(saved).dump(2) + "\n");
+  } catch (const std::exception& e) {
+    throw InputError(std::string(e.what()) + " (the scene file was not written)");
   }
   return saved;
 }

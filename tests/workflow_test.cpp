@@ -2,6 +2,7 @@
 // saving a scene and reopening it to the same image, EXR layers and auto exposure.
 #include "convergence.h"
 #include "procedural.h"
+#include "atomic_file.h"
 #include "test_support.h"
 #include "vdb_import.h"
 
@@ -11,6 +12,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 namespace candela {
 namespace {
@@ -209,7 +211,8 @@ TEST(SaveScene, SavedSceneReopensToTheSameImage) {
   EXPECT_EQ(a.meanImage(), b.meanImage());
   // Saving over an existing file replaces it whole (no temporary left behind).
   saveSceneDesc(reopened, savedPath);
-  EXPECT_FALSE(fs::exists(savedPath + ".saving"));
+  for (const auto& entry : fs::directory_iterator(fs::path(savedPath).parent_path()))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
   EXPECT_EQ(sceneToJson(loadSceneDesc(savedPath)), sceneToJson(reopened));
 }
 
@@ -241,6 +244,67 @@ TEST(SaveScene, ASceneFileRoundTripsEveryField) {
     const SceneDesc saved = saveSceneDesc(scene, (dir / (std::string(name) + ".json")).string());
     EXPECT_EQ(sceneToJson(loadSceneDesc(saved.path)), sceneToJson(saved)) << name;
   }
+}
+
+// Outputs are written under a temporary name and renamed: a writer that fails halfway leaves the
+// previous file as it was and no temporary file behind.
+TEST(Outputs, AFailedWriteLeavesThePreviousFile) {
+  const fs::path dir = test::scratchDirectory("atomic");
+  const std::string path = (dir / "result.csv").string();
+  writeTextAtomically(path, "the good result\n");
+  EXPECT_THROW(writeAtomically(path, [](const std::string& temporary) {
+                 std::ofstream(temporary) << "half of";
+                 throw std::runtime_error("killed");
+               }),
+               std::runtime_error);
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "the good result");
+  // A writer that writes nothing leaves no 0-byte file.
+  const std::string empty = (dir / "empty.csv").string();
+  EXPECT_THROW(writeAtomically(empty, [](const std::string& temporary) { std::ofstream{temporary}; }), std::runtime_error);
+  EXPECT_FALSE(fs::exists(empty));
+  for (const auto& entry : fs::directory_iterator(dir)) EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos);
+}
+
+// A full disk (a 64 KB tmpfs; skipped where the test cannot mount one): the EXR that does not fit
+// is an error naming the file; the good EXR already there stays whole, and no partial file is left.
+TEST(Outputs, AFullDiskKeepsTheGoodFile) {
+  const fs::path dir = test::scratchDirectory("full-disk") / "mnt";
+  fs::create_directories(dir);
+  if (std::system(("mount -t tmpfs -o size=64k tmpfs " + dir.string() + " 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (needs root): the full-disk case is not tested";
+  struct Unmount {
+    fs::path dir;
+    ~Unmount() { std::system(("umount " + dir.string() + " 2>/dev/null").c_str()); }
+  } unmount{dir};
+  Image small;
+  small.width = small.height = 8;
+  small.rgb.assign(3 * 64, 0.5f);
+  const std::string path = (dir / "frame.exr").string();
+  writeExr(path, small);
+  const auto goodSize = fs::file_size(path);
+  Image large;
+  large.width = large.height = 256;
+  large.rgb.resize(3 * 256 * 256);
+  for (size_t i = 0; i < large.rgb.size(); ++i) large.rgb[i] = static_cast<float>((i * 2654435761u) % 1000003) / 1000003.0f;  // incompressible
+  try {
+    writeExr(path, large);
+    ADD_FAILURE() << "a 768 KB EXR fitted a 64 KB disk";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(fs::file_size(path), goodSize);
+  EXPECT_EQ(readExr(path).rgb, small.rgb);
+  // Nothing there before: nothing there after (no 0-byte file).
+  Image noise;
+  noise.width = noise.height = 512;
+  std::mt19937 random(7);
+  for (int i = 0; i < 3 * 512 * 512; ++i) noise.rgb.push_back(std::uniform_real_distribution<float>(0.0f, 1.0f)(random));
+  EXPECT_THROW(writePng((dir / "new.png").string(), noise, 0.0f), std::exception);
+  EXPECT_FALSE(fs::exists(dir / "new.png"));
+  for (const auto& entry : fs::directory_iterator(dir)) EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos);
 }
 
 TEST(ExrLayers, VarianceAndSppTravelWithTheImage) {

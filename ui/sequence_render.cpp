@@ -58,25 +58,6 @@ void SequenceRenderJob::start(const SequenceRenderRequest& request) {
   });
 }
 
-namespace {
-// PATH's image under a temporary name beside it, then renamed over PATH: never a partial file there.
-void writeAtomically(const std::string& path, const Image& image, bool png, float exposure) {
-  const fs::path target(path);
-  if (target.has_parent_path()) fs::create_directories(target.parent_path());
-  const fs::path tmp = target.parent_path() / ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                                               target.extension().string());
-  try {
-    if (png) writePng(tmp.string(), image, exposure);
-    else writeExr(tmp.string(), image);
-    fs::rename(tmp, target);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw;
-  }
-}
-}  // namespace
-
 void SequenceRenderJob::run(SequenceRenderRequest request) {
   using Clock = std::chrono::steady_clock;
   const bool png = !isExrPath(request.pattern);
@@ -120,7 +101,9 @@ void SequenceRenderJob::run(SequenceRenderRequest request) {
       image.metadata["frame"] = std::to_string(f);
       image.metadata["exposure"] = std::to_string(request.exposure);
       if (const AutoDecision* d = scene->autoDecision()) image.metadata["auto_decision"] = d->summary();
-      writeAtomically(path, image, png, request.exposure);
+      // Both writers write atomically (atomic_file.h).
+      if (png) writePng(path, image, request.exposure);
+      else writeExr(path, image);
       std::lock_guard<std::mutex> lock(mutex_);
       progress_.written.push_back(path);
     } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 // with variance and spp layers) and comparison figures.
 #include "viewer_impl.h"
 
+#include "atomic_file.h"
 #include "error_chart.h"
 
 #include <ctime>
@@ -106,7 +107,7 @@ void Viewer::captureFigure() {
         writeDisplayPng(paneStem + ".png", png);
       }
     }
-    std::ofstream(stem.string() + ".csv") << comparisonCsv(*compFrame_);
+    writeTextAtomically(stem.string() + ".csv", comparisonCsv(*compFrame_));
     report("figure: wrote " + path + ", a PNG and an EXR per pane and " + stem.string() + ".csv");
     figureDone_ = true;
   } catch (const std::exception& e) {

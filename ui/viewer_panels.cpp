@@ -2,6 +2,7 @@
 // snapshots, the timeline and the status bar.
 #include "viewer_impl.h"
 
+#include "atomic_file.h"
 #include "auto_strategy.h"
 #include "error_chart.h"
 #include "message_severity.h"
@@ -228,8 +229,12 @@ void Viewer::drawComparisonPanel() {
     const std::string path = freshPath(fs::path("screenshots") / (fs::path(scenePath_).stem().string() + "-comparison.csv"));
     std::error_code ec;
     fs::create_directories("screenshots", ec);
-    std::ofstream(path) << comparisonCsv(*compFrame_);
-    report("wrote " + path);
+    try {
+      writeTextAtomically(path, comparisonCsv(*compFrame_));
+      report("wrote " + path);
+    } catch (const std::exception& e) {
+      report(std::string("export failed: ") + e.what());
+    }
   }
   ImGui::SameLine();
   if (ImGui::Button("Save figure")) writeFigure("");
