@@ -256,17 +256,10 @@ void ScriptedDriver::step(Viewer& v) {
   if (!o.renderSequencePattern.empty()) {
     if (!sequenceStarted_) {
       sequenceStarted_ = true;
-      SequenceRenderRequest r;
-      r.scene = v.edited_;
-      r.scene.display = v.display_;
-      r.first = v.frames_.empty() ? v.edited_.render.frame : v.frames_.first;
-      r.last = v.frames_.empty() ? v.edited_.render.frame : v.frames_.last;
-      r.spp = o.afterSpp > 0 ? o.afterSpp : v.edited_.render.spp;
-      r.pattern = o.renderSequencePattern;
-      r.exposure = v.display_.exposure;
-      r.autoExposure = v.display_.autoExposure;
-      r.threads = o.threads;
-      if (!v.startSequenceRender(r)) v.exitCode_ = 1;
+      const int first = v.frames_.empty() ? v.edited_.render.frame : v.frames_.first;
+      const int last = v.frames_.empty() ? v.edited_.render.frame : v.frames_.last;
+      if (!v.startSequenceRender(v.sequenceRequest(first, last, o.afterSpp > 0 ? o.afterSpp : v.edited_.render.spp, 0.0, o.renderSequencePattern)))
+        v.exitCode_ = 1;
       return;
     }
     if (v.sequenceRunning_) return;

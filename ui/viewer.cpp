@@ -320,6 +320,19 @@ void Viewer::beginLatency(uint64_t request) {
   }
 }
 
+SequenceRenderRequest Viewer::sequenceRequest(int first, int last, int spp, double seconds, const std::string& pattern) const {
+  SequenceRenderRequest r;
+  r.scene = edited_;
+  r.scene.display = display_;
+  r.first = first, r.last = last;
+  r.spp = spp, r.seconds = seconds;
+  r.pattern = pattern;
+  r.exposure = display_.exposure;
+  r.autoExposure = display_.autoExposure;
+  r.threads = options_.threads;
+  return r;
+}
+
 bool Viewer::startSequenceRender(const SequenceRenderRequest& request) {
   try {
     sequenceJob_.start(request);

@@ -294,6 +294,9 @@ class Viewer {
   int sequenceFirst_ = 1, sequenceLast_ = 1, sequenceSpp_ = 64;
   float sequenceSeconds_ = 0.0f;
   std::string sequencePattern_;
+  // The look as edited and shown (its exposure, or auto exposure from the first frame when none was
+  // chosen yet), over frames first-last.
+  SequenceRenderRequest sequenceRequest(int first, int last, int spp, double seconds, const std::string& pattern) const;
   bool startSequenceRender(const SequenceRenderRequest& request);
   void pollSequenceRender();
   void drawSequenceProgress();

@@ -173,19 +173,9 @@ void Viewer::drawDialogs() {
     ImGui::TextDisabled("#### is the frame number; .exr keeps the scene-linear image, .png the display at this exposure.");
     ImGui::TextDisabled("The live render pauses while the sequence renders; the timeline shows its progress.");
     bool close = false;
-    if (ImGui::Button("Render")) {
-      SequenceRenderRequest r;
-      r.scene = edited_;
-      r.scene.display = display_;
-      r.first = sequenceFirst_, r.last = sequenceLast_;
-      r.spp = std::max(0, sequenceSpp_);
-      r.seconds = std::max(0.0f, sequenceSeconds_);
-      r.pattern = sequencePattern_;
-      r.exposure = display_.exposure;
-      r.autoExposure = display_.autoExposure;
-      r.threads = options_.threads;
-      close = startSequenceRender(r);
-    }
+    if (ImGui::Button("Render"))
+      close = startSequenceRender(sequenceRequest(sequenceFirst_, sequenceLast_, std::max(0, sequenceSpp_), std::max(0.0f, sequenceSeconds_),
+                                                  sequencePattern_));
     ImGui::SameLine();
     if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) close = true;
     if (close) ImGui::CloseCurrentPopup();
