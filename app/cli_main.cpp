@@ -156,17 +156,6 @@ double renderOne(const SceneDesc& desc, const std::string& scenePath, const std:
   return loadSeconds + t;
 }
 
-// "A-B" (or "A") as an inclusive frame range.
-std::pair<int, int> parseFrames(const std::string& text) {
-  int a = 0, b = 0;
-  char dash = 0;
-  char rest = 0;
-  const int n = std::sscanf(text.c_str(), "%d%c%d%c", &a, &dash, &b, &rest);
-  if (n == 1) return {a, a};
-  if (n == 3 && dash == '-' && b >= a && b - a < 1000000) return {a, b};
-  throw InputError("--frames: expected A-B with A <= B (e.g. 1-48), got \"" + text + "\"");
-}
-
 int render(const std::string& scenePath, const std::string& out, int spp, double seconds, int seed, int threads,
            const std::string& preset, const std::vector<std::string>& sets, const VdbImportOptions& import, const std::string& framesText) {
   std::vector<std::string> all = sets;
@@ -183,7 +172,8 @@ int render(const std::string& scenePath, const std::string& out, int spp, double
     return 0;
   }
   // A numbered sequence: OUT's own pattern (out.####.exr), else .#### before the extension.
-  const auto [first, last] = parseFrames(framesText);
+  const FrameRange range = parseFrameRange(framesText, "--frames");
+  const int first = range.first, last = range.last;
   // A range past the sequence on disk is a mistyped range, not frames to pass one by one (1-100000
   // over 48 files would print 99,952 errors): said at once, with the range there is.
   const FrameRange onDisk = sceneFrames(desc);
@@ -653,6 +643,12 @@ int main(int argc, char** argv) {
   ins->add_option("-o,--output", out, "Output directory")->required();
 
   CLI11_PARSE(app, argc, argv);
+  try {
+    checkMemoryBudgetEnvironment();
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
   if (maxMemoryGb > 0.0) setMemoryBudgetBytes(static_cast<size_t>(std::min(maxMemoryGb, 1e6) * 1073741824.0));
   try {
     if (rep->parsed()) return runReport(quick, out, threads, reportSeeds, reportScenes, !noStability);

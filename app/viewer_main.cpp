@@ -84,6 +84,12 @@ int main(int argc, char** argv) {
                  "Memory budget in GB for any one input-sized structure (film, grid, probes); default 4 or CANDELA_MAX_MEMORY_GB")
       ->check(candela::finitePositive());
   CLI11_PARSE(app, argc, argv);
+  try {
+    candela::checkMemoryBudgetEnvironment();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "candela: %s\n", e.what());
+    return 2;
+  }
   if (maxMemoryGb > 0.0) candela::setMemoryBudgetBytes(static_cast<size_t>(maxMemoryGb * 1073741824.0));
   for (size_t start = 0; start < panes.size();) {
     const size_t comma = std::min(panes.find(',', start), panes.size());

@@ -11,12 +11,16 @@ namespace candela {
 
 namespace {
 
+// CANDELA_MAX_MEMORY_GB as the --max-memory flag reads it: a finite number of GB above 0, whole.
+bool parseGb(const char* text, double& gb) {
+  char* end = nullptr;
+  gb = std::strtod(text, &end);
+  return end != text && *end == '\0' && std::isfinite(gb) && gb > 0.0 && gb * 1073741824.0 < 1.8e19;
+}
+
 size_t defaultBudget() {
-  if (const char* env = std::getenv("CANDELA_MAX_MEMORY_GB"); env && *env) {
-    char* end = nullptr;
-    const double gb = std::strtod(env, &end);
-    if (end != env && std::isfinite(gb) && gb > 0.0) return static_cast<size_t>(gb * 1073741824.0);
-  }
+  double gb = 0.0;
+  if (const char* env = std::getenv("CANDELA_MAX_MEMORY_GB"); env && *env && parseGb(env, gb)) return static_cast<size_t>(gb * 1073741824.0);
   return size_t{4} << 30;
 }
 
@@ -26,6 +30,14 @@ std::atomic<size_t>& budget() {
 }
 
 }  // namespace
+
+void checkMemoryBudgetEnvironment() {
+  const char* env = std::getenv("CANDELA_MAX_MEMORY_GB");
+  double gb = 0.0;
+  if (env && !parseGb(env, gb))
+    throw InputError(std::string("CANDELA_MAX_MEMORY_GB: expected a finite number of GB above 0, as --max-memory takes (e.g. 8), got \"") +
+                     std::string(env).substr(0, 40) + "\"");
+}
 
 size_t memoryBudgetBytes() { return budget().load(); }
 void setMemoryBudgetBytes(size_t bytes) { budget().store(bytes); }

@@ -39,6 +39,9 @@ inline constexpr size_t kMaxSceneFileBytes = size_t{64} << 20;
 // The memory one input-sized structure (film, grid, probe set...) may take: 4 GiB by default;
 // CANDELA_MAX_MEMORY_GB or the --max-memory flag of both executables change it.
 size_t memoryBudgetBytes();
+// CANDELA_MAX_MEMORY_GB checked exactly as --max-memory is (InputError naming it when it is not a
+// finite number of GB above 0); both executables call it first.
+void checkMemoryBudgetEnvironment();
 void setMemoryBudgetBytes(size_t bytes);
 // Throws InputError "WHERE: WHAT needs N GB, above the memory budget of M GB (...)" when `bytes`
 // exceeds the budget; call it before allocating.

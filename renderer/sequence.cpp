@@ -78,6 +78,41 @@ std::string substituteFrame(const std::string& file, int frame) {
   return (path.parent_path() / name).string();
 }
 
+FrameRange parseFrameRange(const std::string& text, const std::string& origin) {
+  const std::string expected = origin + ": expected a frame A or a range A-B with A <= B (e.g. 1-48), got \"" + text.substr(0, 80) + "\"";
+  // One signed integer at `at`, in 64 bits; its end in `at`.
+  auto number = [&](size_t& at, long long& value) {
+    const size_t start = at;
+    if (at < text.size() && (text[at] == '-' || text[at] == '+')) ++at;
+    const size_t digits = at;
+    while (at < text.size() && text[at] >= '0' && text[at] <= '9') ++at;
+    if (at == digits || at - digits > 18) throw InputError(at - digits > 18 ? origin + ": frame numbers are at most " +
+                                                                                  std::to_string(kMaxFrameNumber) + " (got \"" + text.substr(0, 80) + "\")"
+                                                                            : expected);
+    value = std::stoll(text.substr(start, at - start));
+  };
+  size_t at = 0;
+  long long a = 0, b = 0;
+  number(at, a);
+  b = a;
+  if (at < text.size()) {
+    if (text[at] != '-') throw InputError(expected);
+    ++at;
+    number(at, b);
+  }
+  if (at != text.size()) throw InputError(expected);
+  for (long long f : {a, b})
+    if (f < -kMaxFrameNumber || f > kMaxFrameNumber)
+      throw InputError(origin + ": frame " + std::to_string(f) + " is out of range; expected frames from " + std::to_string(-kMaxFrameNumber) +
+                       " to " + std::to_string(kMaxFrameNumber));
+  if (b < a) throw InputError(origin + ": the range " + text + " runs backwards; expected A-B with A <= B");
+  if (b - a + 1 > kMaxFramesInRange)
+    throw InputError(origin + ": " + std::to_string(b - a + 1) + " frames; expected at most " + std::to_string(kMaxFramesInRange) + " in one range");
+  FrameRange r;
+  r.first = static_cast<int>(a), r.last = static_cast<int>(b), r.count = static_cast<int>(b - a + 1);
+  return r;
+}
+
 FrameRange findFrames(const std::string& patternPath) {
   FrameRange range;
   const fs::path path(patternPath);

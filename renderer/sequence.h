@@ -30,6 +30,15 @@ struct FrameRange {
   int count = 0;             // frames found on disk (gaps are allowed)
   bool empty() const { return last < first; }
 };
+// The most frames one range may name, and the largest frame number (render.frame's range): a range
+// past them is a typing error, refused before anything renders.
+inline constexpr long long kMaxFramesInRange = 100000;
+inline constexpr long long kMaxFrameNumber = 1000000;
+// "A" or "A-B" (frames A to B inclusive; either may be negative: "-10--1"), parsed in 64 bits and
+// checked: A <= B, both within +-kMaxFrameNumber, at most kMaxFramesInRange frames. Errors name
+// `origin` (e.g. "--frames") and what was expected.
+FrameRange parseFrameRange(const std::string& text, const std::string& origin);
+
 // The frames on disk that match the pattern `path` (a path with a pattern in its file name).
 FrameRange findFrames(const std::string& path);
 // The frames of every patterned volume of `scene` (resolved against its path): their intersection,

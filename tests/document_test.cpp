@@ -274,6 +274,26 @@ TEST(Sequences, TheViewerRendersASequenceToDisk) {
   EXPECT_THROW(job.start(request), InputError);
 }
 
+// Frame ranges are parsed in 64 bits and bounded: overflowing, reversed, absurd or malformed ranges
+// are refused with a message, never wrapped round to something else.
+TEST(Sequences, FrameRangesAreBounded) {
+  EXPECT_EQ(parseFrameRange("7", "--frames").first, 7);
+  const FrameRange r = parseFrameRange("-10--1", "--frames");
+  EXPECT_EQ(r.first, -10);
+  EXPECT_EQ(r.last, -1);
+  EXPECT_EQ(r.count, 10);
+  EXPECT_EQ(parseFrameRange("1-100000", "--frames").count, 100000);
+  for (const char* bad : {"-2147483648-2147483647", "-2000000000-2000000000", "2147483647", "1-100001", "5-4", "1-", "-", "a", " 1", "1-2x",
+                          "99999999999999999999999", "1--", "1-+"}) {
+    try {
+      parseFrameRange(bad, "--frames");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("--frames: ", 0), 0u) << e.what();
+    }
+  }
+}
+
 TEST(Sequences, ASceneRendersTheFrameItNames) {
   // Two frames that differ (constant densities 1 and 4): render.frame picks the file.
   const fs::path dir = test::scratchDirectory("frames");

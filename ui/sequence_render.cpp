@@ -39,8 +39,8 @@ void SequenceRenderJob::start(const SequenceRenderRequest& request) {
     throw InputError(out + ": expected an output ending in .exr or .png");
   if (request.last < request.first) throw InputError("frames: expected first <= last, got " + std::to_string(request.first) + "-" +
                                                      std::to_string(request.last));
-  if (static_cast<long long>(request.last) - request.first + 1 > kMaxSequenceFrames)
-    throw InputError("frames: expected at most " + std::to_string(kMaxSequenceFrames) + " frames");
+  if (static_cast<long long>(request.last) - request.first + 1 > kMaxFramesInRange)
+    throw InputError("frames: expected at most " + std::to_string(kMaxFramesInRange) + " frames");
   if (request.spp <= 0 && !(request.seconds > 0.0)) throw InputError("expected samples per pixel or seconds per frame above 0");
   cancel();
   wait();

@@ -60,7 +60,4 @@ class SequenceRenderJob {
   std::thread worker_;
 };
 
-// The longest a sequence render may be: a range past it is a typing error, not a job.
-inline constexpr int kMaxSequenceFrames = 100000;
-
 }  // namespace candela
